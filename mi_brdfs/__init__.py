@@ -1,0 +1,35 @@
+"""mi_brdfs: the classic BRDF models of the course lecture as Mitsuba 3 plugins.
+
+``import mi_brdfs`` finds a working LLVM for Dr.Jit (see ``_llvm``), activates
+the ``llvm_ad_rgb`` variant if no variant is active, and registers every plugin
+for the active variant. After switching variants, call ``mi_brdfs.register()``.
+"""
+from . import _llvm
+
+_llvm.configure()            # must precede the first `import drjit`
+
+import mitsuba as mi         # noqa: E402
+
+_llvm.check()
+
+from . import plugin         # noqa: E402
+from .cook_torrance import CookTorrance   # noqa: E402
+from .lambert import Lambert              # noqa: E402
+
+PLUGINS = (Lambert, CookTorrance)
+DEFAULT_VARIANT = "llvm_ad_rgb"
+
+__all__ = ["register", "PLUGINS", "DEFAULT_VARIANT", "Lambert", "CookTorrance"]
+
+
+def register() -> str:
+    """Register every plugin for the active variant (activating the default if
+    none is active); returns the variant."""
+    if mi.variant() is None:
+        mi.set_variant(DEFAULT_VARIANT)
+    for cls in PLUGINS:
+        plugin.register_plugin(cls)
+    return mi.variant()
+
+
+register()

@@ -1,0 +1,81 @@
+"""
+``lambert`` — Lambert diffuse reflection
+=========================================
+
+.. list-table::
+   :header-rows: 1
+
+   * - Parameter
+     - Type
+     - Description
+     - Default
+   * - ``reflectance``
+     - float, rgb or texture (∂)
+     - m_D, the diffuse colour. Must be >= 0; values above 1 are allowed
+       (scanline mode clamps the lobe to [0, 1]).
+     - 0.5
+   * - ``mode``
+     - string
+     - ``"hdr"`` (radiometric, unclamped) or ``"scanline"`` (the lecture's formula).
+     - ``"hdr"``
+
+The lecture's BRDF for scan-line rendering, with d the light direction (``wo``)
+and n the normal, returned as is by ``eval`` (it carries the cosine already)::
+
+    scanline:  f_r = clamp01(m_D · clamp(d·n))
+    hdr:       f_r = m_D / pi,   eval = m_D / pi · cos(theta_o)
+
+Sampling: cosine-weighted hemisphere. With ``reflectance`` 0 the plugin has no
+lobe at all. A viewer or light below the surface gets no reflection.
+
+.. code-block:: xml
+
+    <bsdf type="lambert">
+        <rgb name="reflectance" value="0.8, 0.3, 0.2"/>
+        <string name="mode" value="scanline"/>
+    </bsdf>
+"""
+from __future__ import annotations
+
+import drjit as dr
+import mitsuba as mi
+
+from .plugin import BRDF, Reader, is_zero
+
+
+# ----------------------------------------------------------------------------
+#  The formulas (cos_o = d·n, the light's cosine)
+# ----------------------------------------------------------------------------
+
+def f_scanline(m_d, cos_o):
+    return m_d * dr.fmax(cos_o, 0.0)
+
+
+def f_hdr(m_d, cos_o):
+    return m_d * dr.inv_pi * dr.fmax(cos_o, 0.0)
+
+
+# ----------------------------------------------------------------------------
+#  The plugin
+# ----------------------------------------------------------------------------
+
+class Lambert(BRDF):
+    name = "lambert"
+
+    def read(self, reader: Reader) -> None:
+        self.m_reflectance = reader.texture("reflectance", 0.5)   # m_D
+
+    def has_diffuse(self) -> bool:
+        return not is_zero(self.m_reflectance)
+
+    def traverse(self, cb):
+        cb.put("reflectance", self.m_reflectance, mi.ParamFlags.Differentiable)
+
+    def lobes(self, si, wo, active):
+        m_d = self.m_reflectance.eval(si, active)
+        cos_o = mi.Frame3f.cos_theta(wo)
+        f = f_scanline if self.mode == "scanline" else f_hdr
+        return f(m_d, cos_o), mi.Spectrum(0.0)
+
+    def describe(self) -> dict:
+        return {"reflectance": self.m_reflectance}

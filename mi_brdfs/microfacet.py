@@ -1,0 +1,121 @@
+"""Microfacet building blocks from the lecture, as pure Dr.Jit functions.
+
+Inputs are cosines with the normal (local shading frame: n = +z) and the
+roughness rho (called ``alpha`` in the plugins). Every function is NaN- and
+Inf-free for cosines in [-1, 1] and ``alpha >= ALPHA_MIN`` (values and
+gradients): degenerate denominators are kept away from zero by ``TINY``.
+
+  D, distribution   Blinn   (n·h)^(2/rho² - 2) / (pi rho²)
+                    Beckmann exp(((n·h)² - 1) / ((n·h)² rho²)) / (pi rho² (n·h)^4)
+                    GGX     rho² / (pi (clamp(n·h)² (rho² - 1) + 1)²)
+  F, Fresnel        Schlick F0 + (1 - F0) (1 - clamp(w_r·h))^5
+  G, geometry       Cook-Torrance (V-cavity)
+                        min(1, 2(h·n)(w_r·n)/(w_r·h), 2(h·n)(d·n)/(w_r·h))
+                    Smith   G1(w_r) G1(d), with the lecture's
+                        g_GGX = 2 / (1 + sqrt(1 + rho² (1 - c²)/c²))
+                    and the exact Smith G1 of Beckmann (used for Blinn too)
+                        a = c / (rho sqrt(1 - c²)),  G1 = 2 / (1 + erf(a) + exp(-a²)/(a sqrt(pi)))
+"""
+from __future__ import annotations
+
+import drjit as dr
+import mitsuba as mi
+
+ALPHA_MIN = 1e-4      # smallest roughness used (alpha = 0 is clamped here, as Mitsuba does)
+TINY = 1e-18          # keeps squared cosines away from 0 (TINY² is still a normal float32)
+
+DISTRIBUTIONS = ("blinn", "beckmann", "ggx")
+GEOMETRIES = ("cook_torrance", "smith")
+
+
+def half_vector(wi, wo):
+    """normalize(wi + wo); the zero vector when wi = -wo."""
+    h = wi + wo
+    return h * dr.rsqrt(dr.fmax(dr.squared_norm(h), TINY))
+
+
+# ----------------------------------------------------------------------------
+#  D: normal distributions (normalised: integral of D(h) cos(theta_h) = 1)
+# ----------------------------------------------------------------------------
+
+def d_blinn(cos_h, alpha):
+    e = 2.0 / dr.square(alpha) - 2.0                     # the Blinn exponent
+    c = dr.fmax(cos_h, TINY)
+    d = dr.power(c, e) / (dr.pi * dr.square(alpha))
+    return dr.select(cos_h > 0, d, 0.0)
+
+
+def d_beckmann(cos_h, alpha):
+    c2 = dr.fmax(dr.square(cos_h), TINY)
+    a2 = dr.square(alpha)
+    d = dr.exp((c2 - 1.0) / (c2 * a2)) / (dr.pi * a2 * dr.square(c2))
+    return dr.select(cos_h > 0, d, 0.0)
+
+
+def d_ggx(cos_h, alpha):
+    c = dr.fmax(cos_h, 0.0)
+    a2 = dr.square(alpha)
+    d = a2 / (dr.pi * dr.square(dr.square(c) * (a2 - 1.0) + 1.0))
+    return dr.select(cos_h > 0, d, 0.0)
+
+
+D = {"blinn": d_blinn, "beckmann": d_beckmann, "ggx": d_ggx}
+
+
+# ----------------------------------------------------------------------------
+#  F and G
+# ----------------------------------------------------------------------------
+
+def fresnel_schlick(f0, cos_theta):
+    return f0 + (1.0 - f0) * dr.power(1.0 - dr.clip(cos_theta, 0.0, 1.0), 5.0)
+
+
+def g_cook_torrance(cos_h, cos_i, cos_o, i_dot_h):
+    """The lecture's microfacet (V-cavity) term; cos_i is w_r·n, cos_o is d·n."""
+    denom = dr.fmax(i_dot_h, TINY)
+    g = dr.minimum(1.0, dr.minimum(2.0 * cos_h * cos_i / denom,
+                                   2.0 * cos_h * cos_o / denom))
+    return dr.fmax(g, 0.0)
+
+
+def g1_ggx(cos_v, alpha):
+    c2 = dr.fmax(dr.square(cos_v), TINY)
+    tan2 = dr.fmax(1.0 - c2, 0.0) / c2
+    g = 2.0 / (1.0 + dr.sqrt(1.0 + dr.square(alpha) * tan2))
+    return dr.select(cos_v > 0, g, 0.0)
+
+
+def g1_beckmann(cos_v, alpha):
+    c = dr.fmax(cos_v, 0.0)
+    sin = dr.sqrt(dr.fmax(1.0 - dr.square(c), TINY))
+    a = dr.fmax(c / (alpha * sin), 1e-6)
+    g = 2.0 / (1.0 + dr.erf(a) + dr.exp(-dr.square(a)) / (a * dr.sqrt(dr.pi)))
+    return dr.select(cos_v > 0, g, 0.0)
+
+
+G1 = {"blinn": g1_beckmann, "beckmann": g1_beckmann, "ggx": g1_ggx}
+
+
+def g_smith(distribution, cos_i, cos_o, alpha):
+    g1 = G1[distribution]
+    return g1(cos_i, alpha) * g1(cos_o, alpha)
+
+
+# ----------------------------------------------------------------------------
+#  Sampling the Blinn distribution (Mitsuba samples Beckmann and GGX itself)
+# ----------------------------------------------------------------------------
+
+def sample_blinn(sample2, alpha):
+    """A microfacet normal with density D_blinn(m) cos(theta_m).
+
+    The cdf of cos(theta_m) is c^(e+2) with e + 2 = 2/rho², so c = u^(rho²/2).
+    """
+    cos_t = dr.power(dr.fmax(sample2.x, TINY), 0.5 * dr.square(alpha))
+    sin_t = dr.sqrt(dr.fmax(1.0 - dr.square(cos_t), 0.0))
+    s, c = dr.sincos(2.0 * dr.pi * sample2.y)
+    return mi.Vector3f(c * sin_t, s * sin_t, cos_t)
+
+
+def pdf_blinn(cos_h, alpha):
+    """Density of sample_blinn() over microfacet normals."""
+    return d_blinn(cos_h, alpha) * dr.fmax(cos_h, 0.0)

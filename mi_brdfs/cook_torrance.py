@@ -95,10 +95,10 @@ def specular(wi, wo, alpha, f0, distribution: str, geometry: str):
     cos_i, cos_o = mi.Frame3f.cos_theta(wi), mi.Frame3f.cos_theta(wo)
     h = mf.half_vector(wi, wo)
     cos_h, i_dot_h = mi.Frame3f.cos_theta(h), dr.dot(wi, h)
-    d = mf.D[distribution](cos_h, alpha)
+    d = mf.D[distribution](h, alpha)
     f = mf.fresnel_schlick(f0, i_dot_h)
     if geometry == "smith":
-        g = mf.g_smith(distribution, cos_i, cos_o, alpha)
+        g = mf.g_smith(distribution, wi, wo, alpha)
     else:
         g = mf.g_cook_torrance(cos_h, cos_i, cos_o, i_dot_h)
     return d * f * g / (4.0 * dr.fmax(cos_i, mf.TINY))
@@ -189,7 +189,7 @@ class CookTorrance(BRDF):
         h = mf.half_vector(si.wi, wo)
         jacobian = 1.0 / (4.0 * dr.fmax(dr.dot(wo, h), mf.TINY))   # dm/dwo
         if self.distribution == "blinn":
-            pdf_m = mf.pdf_blinn(mi.Frame3f.cos_theta(h), self.alpha(si, active))
+            pdf_m = mf.pdf_blinn(h, self.alpha(si, active))
         else:
             pdf_m = self.mitsuba_distribution(si, active).pdf(si.wi, h)
         return dr.select(dr.dot(wo, h) > 0, pdf_m * jacobian, 0.0)

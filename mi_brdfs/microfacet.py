@@ -1,7 +1,7 @@
 """Microfacet building blocks from the lecture, as pure Dr.Jit functions.
 
-Inputs are cosines with the normal (local shading frame: n = +z) and the
-roughness rho (called ``alpha`` in the plugins). Every function is NaN- and
+Inputs are local directions (shading frame: n = +z), or cosines with the
+normal, and the roughness rho (called ``alpha`` in the plugins). Every function is NaN- and
 Inf-free for cosines in [-1, 1] and ``alpha >= ALPHA_MIN`` (values and
 gradients): degenerate denominators are kept away from zero by ``TINY``.
 
@@ -38,25 +38,33 @@ def half_vector(wi, wo):
 #  D: normal distributions (normalised: integral of D(h) cos(theta_h) = 1)
 # ----------------------------------------------------------------------------
 
-def d_blinn(cos_h, alpha):
+def _cos2_sin2(v):
+    """cos² and sin² of a local direction's polar angle, sin² from x and y
+    (not 1 - cos², which cancels catastrophically in float32 near the normal)."""
+    return dr.square(v.z), dr.square(v.x) + dr.square(v.y)
+
+
+def d_blinn(m, alpha):
     e = 2.0 / dr.square(alpha) - 2.0                     # the Blinn exponent
-    c = dr.fmax(cos_h, TINY)
+    c = dr.fmax(m.z, TINY)
     d = dr.power(c, e) / (dr.pi * dr.square(alpha))
-    return dr.select(cos_h > 0, d, 0.0)
+    return dr.select(m.z > 0, d, 0.0)
 
 
-def d_beckmann(cos_h, alpha):
-    c2 = dr.fmax(dr.square(cos_h), TINY)
+def d_beckmann(m, alpha):
+    cos2, sin2 = _cos2_sin2(m)
+    cos2 = dr.fmax(cos2, TINY)
     a2 = dr.square(alpha)
-    d = dr.exp((c2 - 1.0) / (c2 * a2)) / (dr.pi * a2 * dr.square(c2))
-    return dr.select(cos_h > 0, d, 0.0)
+    d = dr.exp(-sin2 / (cos2 * a2)) / (dr.pi * a2 * dr.square(cos2))
+    return dr.select(m.z > 0, d, 0.0)
 
 
-def d_ggx(cos_h, alpha):
-    c = dr.fmax(cos_h, 0.0)
+def d_ggx(m, alpha):
+    cos2, sin2 = _cos2_sin2(m)
     a2 = dr.square(alpha)
-    d = a2 / (dr.pi * dr.square(dr.square(c) * (a2 - 1.0) + 1.0))
-    return dr.select(cos_h > 0, d, 0.0)
+    # clamp(n·h)² (rho² - 1) + 1, written as sin² + cos² rho² for float32 accuracy
+    d = a2 / (dr.pi * dr.square(sin2 + cos2 * a2))
+    return dr.select(m.z > 0, d, 0.0)
 
 
 D = {"blinn": d_blinn, "beckmann": d_beckmann, "ggx": d_ggx}
@@ -78,27 +86,26 @@ def g_cook_torrance(cos_h, cos_i, cos_o, i_dot_h):
     return dr.fmax(g, 0.0)
 
 
-def g1_ggx(cos_v, alpha):
-    c2 = dr.fmax(dr.square(cos_v), TINY)
-    tan2 = dr.fmax(1.0 - c2, 0.0) / c2
+def g1_ggx(v, alpha):
+    cos2, sin2 = _cos2_sin2(v)
+    tan2 = sin2 / dr.fmax(cos2, TINY)
     g = 2.0 / (1.0 + dr.sqrt(1.0 + dr.square(alpha) * tan2))
-    return dr.select(cos_v > 0, g, 0.0)
+    return dr.select(v.z > 0, g, 0.0)
 
 
-def g1_beckmann(cos_v, alpha):
-    c = dr.fmax(cos_v, 0.0)
-    sin = dr.sqrt(dr.fmax(1.0 - dr.square(c), TINY))
-    a = dr.fmax(c / (alpha * sin), 1e-6)
+def g1_beckmann(v, alpha):
+    cos2, sin2 = _cos2_sin2(v)
+    a = dr.fmax(dr.sqrt(cos2 / dr.fmax(sin2, TINY)) / alpha, 1e-6)   # 1 / (rho tan)
     g = 2.0 / (1.0 + dr.erf(a) + dr.exp(-dr.square(a)) / (a * dr.sqrt(dr.pi)))
-    return dr.select(cos_v > 0, g, 0.0)
+    return dr.select(v.z > 0, g, 0.0)
 
 
 G1 = {"blinn": g1_beckmann, "beckmann": g1_beckmann, "ggx": g1_ggx}
 
 
-def g_smith(distribution, cos_i, cos_o, alpha):
+def g_smith(distribution, wi, wo, alpha):
     g1 = G1[distribution]
-    return g1(cos_i, alpha) * g1(cos_o, alpha)
+    return g1(wi, alpha) * g1(wo, alpha)
 
 
 # ----------------------------------------------------------------------------
@@ -116,6 +123,6 @@ def sample_blinn(sample2, alpha):
     return mi.Vector3f(c * sin_t, s * sin_t, cos_t)
 
 
-def pdf_blinn(cos_h, alpha):
+def pdf_blinn(m, alpha):
     """Density of sample_blinn() over microfacet normals."""
-    return d_blinn(cos_h, alpha) * dr.fmax(cos_h, 0.0)
+    return d_blinn(m, alpha) * dr.fmax(m.z, 0.0)

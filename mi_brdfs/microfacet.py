@@ -23,6 +23,7 @@ import mitsuba as mi
 
 ALPHA_MIN = 1e-4      # smallest roughness used (alpha = 0 is clamped here, as Mitsuba does)
 TINY = 1e-18          # keeps squared cosines away from 0 (TINY² is still a normal float32)
+BECKMANN_CUTOFF = 100.0   # tan²/rho² beyond which the Beckmann D is 0 (exp(-100) < float32 min)
 
 DISTRIBUTIONS = ("blinn", "beckmann", "ggx")
 GEOMETRIES = ("cook_torrance", "smith")
@@ -53,10 +54,15 @@ def d_blinn(m, alpha):
 
 def d_beckmann(m, alpha):
     cos2, sin2 = _cos2_sin2(m)
-    cos2 = dr.fmax(cos2, TINY)
     a2 = dr.square(alpha)
+    # Where exp(-tan²/rho²) < exp(-BECKMANN_CUTOFF) (0 in float32), D is 0; the
+    # formula is then evaluated on a benign stand-in so that no 0/0 reaches the
+    # gradients through the unselected branch.
+    valid = (m.z > 0) & (sin2 < BECKMANN_CUTOFF * cos2 * a2)
+    cos2 = dr.select(valid, cos2, 1.0)
+    sin2 = dr.select(valid, sin2, 0.0)
     d = dr.exp(-sin2 / (cos2 * a2)) / (dr.pi * a2 * dr.square(cos2))
-    return dr.select(m.z > 0, d, 0.0)
+    return dr.select(valid, d, 0.0)
 
 
 def d_ggx(m, alpha):

@@ -38,7 +38,7 @@ class ParameterError(ValueError):
 # ----------------------------------------------------------------------------
 
 def _fmt_range(lo: float | None, hi: float | None) -> str:
-    return f"[{'-inf' if lo is None else lo:g}, {'inf' if hi is None else hi:g}]"
+    return f"[{'-inf' if lo is None else f'{lo:g}'}, {'inf' if hi is None else f'{hi:g}'}]"
 
 
 def texture_range(tex) -> tuple[float, float] | None:
@@ -227,7 +227,7 @@ class BRDF:
         active &= (pdf > 0) & (mi.Frame3f.cos_theta(wo) > 0)
         diffuse_t = mi.UInt32(+mi.BSDFFlags.DiffuseReflection)
         glossy_t = mi.UInt32(+mi.BSDFFlags.GlossyReflection)
-        bs.wo = wo
+        bs.wo = dr.select(active, wo, 0.0)      # no NaN from inactive lanes either
         bs.pdf = dr.select(active, pdf, 0.0)
         bs.eta = 1.0
         bs.sampled_type = dr.select(pick_s, glossy_t, diffuse_t)

@@ -79,8 +79,10 @@ def check() -> None:
             f"({ENV}={os.environ.get(ENV, '<unset>')}). " + FIX)
     version = tuple(dr.detail.llvm_version())
     if version[0] < MIN_WORKING:
-        late = ("drjit was imported before mi_brdfs, so mi_brdfs could not point it "
-                "at a working LLVM. " if ENV not in os.environ and wheel_library() else "")
+        wheel = wheel_library()
+        late = (f"drjit was imported before mi_brdfs, so mi_brdfs could not point it at "
+                f"the working LLVM it found ({wheel}): import mi_brdfs first, or export "
+                f"{ENV}={wheel}. " if ENV not in os.environ and wheel else "")
         raise LLVMError(
             f"mi_brdfs: drjit loaded LLVM {'.'.join(map(str, version))} from "
             f"{loaded_library()}; drjit 1.5 aborts the interpreter with LLVM < "

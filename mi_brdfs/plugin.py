@@ -14,7 +14,8 @@
 A model subclasses :class:`BRDF` and supplies ``read(props)``,
 ``lobes(si, wo, active) -> (f_diffuse, f_specular)`` (eval convention, i.e.
 including the lecture's clamp(d·n) in scanline mode and cos θ_o in hdr mode,
-before the per-lobe clamp), ``lobe_weights()`` (the constant factors that
+before the per-lobe clamp; lanes with wi or wo below the surface are zeroed
+by the base, unless ``lit_from_behind()``), ``lobe_weights()`` (the constant factors that
 multiply each clamped lobe, e.g. k and 1-k), ``selection_weights(si, active)``,
 and, if it has a glossy lobe, ``sample_specular`` / ``pdf_specular``.
 """
@@ -153,6 +154,11 @@ class BRDF:
     def has_specular(self) -> bool:
         return False
 
+    def lit_from_behind(self) -> bool:
+        """True if eval() must see lights below the surface (cos_o <= 0), e.g.
+        the toon model's dark side; lobes() then zeroes what must be zero."""
+        return False
+
     def lobe_weights(self):
         return 1.0, 1.0
 
@@ -241,7 +247,9 @@ class BRDF:
         cos_i = mi.Frame3f.cos_theta(si.wi)
         cos_o = mi.Frame3f.cos_theta(wo)
         # A viewer or light below (or exactly on) the surface gets no reflection.
-        active = mi.Bool(active) & (cos_i > 0) & (cos_o > 0)
+        active = mi.Bool(active) & (cos_i > 0)
+        if not self.lit_from_behind():
+            active &= cos_o > 0
         f_d, f_s = self.lobes(si, wo, active)
         w_d, w_s = self.lobe_weights()
         if self.mode == "scanline":

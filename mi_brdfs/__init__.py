@@ -2,7 +2,7 @@
 
 ``import mi_brdfs`` finds a working LLVM for Dr.Jit (see ``_llvm``), activates
 the ``llvm_ad_rgb`` variant if no variant is active, and registers every plugin
-for the active variant. After switching variants, call ``mi_brdfs.register()``.
+(the BSDFs and the ``scanline``/``hdr`` integrators) for the active variant. After switching variants, call ``mi_brdfs.register()``.
 """
 from . import _llvm
 
@@ -12,7 +12,7 @@ import mitsuba as mi         # noqa: E402
 
 _llvm.check()
 
-from . import plugin         # noqa: E402
+from . import integrator, plugin   # noqa: E402
 from .cook_torrance import CookTorrance   # noqa: E402
 from .lambert import Lambert              # noqa: E402
 
@@ -29,6 +29,7 @@ def register() -> str:
         mi.set_variant(DEFAULT_VARIANT)
     for cls in PLUGINS:
         plugin.register_plugin(cls)
+    integrator.register()
     return mi.variant()
 
 

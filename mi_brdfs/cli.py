@@ -1,20 +1,30 @@
 """The ``mi-brdfs`` command (also ``python -m mi_brdfs``).
 
-    mi-brdfs render SCENE.xml [-D key=value ...] [--spp N] [-o out.exr]
-                    [--png out.png] [--variant NAME] [--verbose]
+    mi-brdfs render SCENE.xml [-D key=value ...] [--spp N] [--passes P] [-o out.exr]
+                    [--png out.png [--tonemap NAME] [--exposure EV]] [--seed S]
+                    [--variant NAME] [--verbose]
 
-Registers the plugins, loads the scene with its ``-D`` defaults, renders, and
-writes a linear EXR and, if asked, an 8-bit sRGB PNG (clamped to [0, 1], the
-scan-line behaviour). Both files are written atomically: a temporary file
-beside the target, renamed over it only once complete.
+Registers the plugins, loads the scene with its ``-D`` defaults (as Mitsuba's
+own ``mitsuba`` command does), renders the spp in passes with different seeds
+(Mitsuba's JIT variants report no progress of their own) and averages them,
+showing progress and an ETA after each pass; then writes the linear EXR and,
+if asked, a tone-mapped 8-bit sRGB PNG. Outputs are written atomically.
+Errors print one line (``mi-brdfs: error: ...``) and exit with status 1; with
+``--verbose`` the traceback is shown.
 """
 from __future__ import annotations
 
 import argparse
 import os
+import re
 import sys
-import tempfile
 import time
+
+from . import exr, tonemap
+
+
+class CLIError(Exception):
+    """An error reported as one line, without a traceback."""
 
 
 def parse_defines(pairs: list[str]) -> dict[str, str]:
@@ -22,77 +32,140 @@ def parse_defines(pairs: list[str]) -> dict[str, str]:
     for pair in pairs:
         key, sep, value = pair.partition("=")
         if not sep or not key:
-            raise ValueError(f"-D expects key=value, got {pair!r}")
+            raise CLIError(f"-D expects key=value, got {pair!r}")
         defines[key] = value
     return defines
 
 
-def write_atomically(bitmap, path: str) -> None:
-    """Write a mi.Bitmap to path via a temporary file renamed over it."""
+def check_writable(path: str) -> None:
     directory = os.path.dirname(os.path.abspath(path))
-    suffix = os.path.splitext(path)[1]
-    fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=suffix, dir=directory)
-    os.close(fd)
-    try:
-        bitmap.write(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    if not os.path.isdir(directory):
+        raise CLIError(f"cannot write {path}: directory {directory} does not exist")
+    if not os.access(directory, os.W_OK):
+        raise CLIError(f"cannot write {path}: directory {directory} is not writable")
 
 
-def render(scene_path: str, defines: dict[str, str] | None = None, spp: int | None = None,
-           exr: str | None = None, png: str | None = None, seed: int = 0):
-    """Load and render a scene; write EXR/PNG if paths are given; return the mi.Bitmap."""
+def split_passes(spp: int, passes: int) -> list[int]:
+    """spp as `passes` near-equal chunks (none empty)."""
+    passes = max(1, min(passes, spp))
+    base, extra = divmod(spp, passes)
+    return [base + (i < extra) for i in range(passes)]
+
+
+def progress(done: int, total: int, elapsed: float, stream=sys.stderr) -> None:
+    width = 30
+    filled = int(width * done / total)
+    eta = elapsed / done * (total - done) if done else float("nan")
+    stream.write(f"\r[{'#' * filled}{'.' * (width - filled)}] {done}/{total} spp, "
+                 f"{elapsed:.1f} s, ETA {eta:.1f} s ")
+    if done == total:
+        stream.write("\n")
+    stream.flush()
+
+
+def render_passes(scene, spp: int, passes: int = 8, seed: int = 0, show=progress):
+    """Render ``spp`` samples per pixel in passes with distinct seeds; the
+    spp-weighted mean as an (H, W, C) NumPy array."""
     import mitsuba as mi
+    import numpy as np
 
-    scene = mi.load_file(scene_path, **(defines or {}))
-    image = mi.render(scene, spp=spp or 0, seed=seed)
-    bitmap = mi.Bitmap(image)
-    if exr:
-        write_atomically(bitmap, exr)
-    if png:
-        ldr = bitmap.convert(mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.UInt8, srgb_gamma=True)
-        write_atomically(ldr, png)
-    return bitmap
+    chunks = split_passes(spp, passes)
+    total, done, start = None, 0, time.perf_counter()
+    for i, n in enumerate(chunks):
+        image = np.array(mi.render(scene, spp=n, seed=seed * len(chunks) + i), dtype=np.float64)
+        total = image * n if total is None else total + image * n
+        done += n
+        if show:
+            show(done, spp, time.perf_counter() - start)
+    return (total / spp).astype(np.float32)
+
+
+def scene_spp(scene) -> int:
+    return scene.sensors()[0].sampler().sample_count()
+
+
+def cmd_render(args) -> int:
+    if not os.path.exists(args.scene):
+        raise CLIError(f"scene not found: {args.scene}")
+    defines = parse_defines(args.defines)
+    out = args.output or os.path.splitext(os.path.basename(args.scene))[0] + ".exr"
+    check_writable(out)
+    if args.png:
+        check_writable(args.png)
+    if args.tonemap not in tonemap.OPERATORS:
+        raise CLIError(f"unknown --tonemap {args.tonemap!r}; valid: {', '.join(tonemap.OPERATORS)}")
+
+    import mi_brdfs
+    import mitsuba as mi
+    if args.variant:
+        try:
+            mi.set_variant(args.variant)
+        except Exception as error:
+            raise CLIError(f"variant {args.variant!r} is not available: {error}") from None
+        mi_brdfs.register()
+
+    scene = mi.load_file(args.scene, **defines)
+    spp = args.spp or scene_spp(scene)
+    start = time.perf_counter()
+    image = render_passes(scene, spp, args.passes, args.seed,
+                          show=None if args.quiet else progress)
+    rgb = image[..., :3]
+    exr.write_exr(out, rgb)
+    written = [out]
+    if args.png:
+        tonemap.write_png(args.png, rgb, args.tonemap, args.exposure)
+        written.append(args.png)
+    print(f"{args.scene}: {rgb.shape[1]}x{rgb.shape[0]}, {spp} spp in "
+          f"{time.perf_counter() - start:.1f} s -> {', '.join(written)}")
+    return 0
+
+
+def parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="mi-brdfs", description=__doc__.splitlines()[0])
+    sub = p.add_subparsers(dest="command", required=True)
+    r = sub.add_parser("render", help="render a scene to EXR (and PNG)")
+    r.add_argument("scene")
+    r.add_argument("-D", dest="defines", action="append", default=[], metavar="key=value",
+                   help="set a scene <default> parameter")
+    r.add_argument("--spp", type=int, default=None, help="samples per pixel (default: the scene's)")
+    r.add_argument("--passes", type=int, default=8, help="render in this many passes (default 8)")
+    r.add_argument("--seed", type=int, default=0)
+    r.add_argument("-o", "--output", default=None, help="EXR path (default: SCENE.exr here)")
+    r.add_argument("--png", default=None, help="also write an 8-bit sRGB PNG here")
+    r.add_argument("--tonemap", default="clamp", help="PNG tone mapping: " + ", ".join(tonemap.OPERATORS))
+    r.add_argument("--exposure", type=float, default=0.0, help="PNG exposure in stops (EV)")
+    r.add_argument("--variant", default=None, help="Mitsuba variant (default llvm_ad_rgb)")
+    r.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    r.add_argument("-v", "--verbose", action="store_true", help="show tracebacks on errors")
+    r.set_defaults(run=cmd_render)
+    return p
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="mi-brdfs", description=__doc__.splitlines()[0])
-    sub = parser.add_subparsers(dest="command", required=True)
-    r = sub.add_parser("render", help="render a scene to EXR (and PNG)")
-    r.add_argument("scene")
-    r.add_argument("-D", dest="defines", action="append", default=[], metavar="key=value")
-    r.add_argument("--spp", type=int, default=None, help="samples per pixel (default: the scene's)")
-    r.add_argument("-o", "--output", default=None, help="EXR path (default: SCENE.exr)")
-    r.add_argument("--png", default=None, help="also write an 8-bit sRGB PNG here")
-    r.add_argument("--variant", default=None, help="Mitsuba variant (default llvm_ad_rgb)")
-    r.add_argument("--verbose", action="store_true", help="show tracebacks")
-    args = parser.parse_args(argv)
-
+    args = parser().parse_args(argv)
     try:
-        if not os.path.exists(args.scene):
-            raise FileNotFoundError(f"scene not found: {args.scene}")
-        defines = parse_defines(args.defines)
-        import mi_brdfs
-        import mitsuba as mi
-        if args.variant:
-            mi.set_variant(args.variant)
-            mi_brdfs.register()
-        exr = args.output or os.path.splitext(os.path.basename(args.scene))[0] + ".exr"
-        start = time.perf_counter()
-        bitmap = render(args.scene, defines, args.spp, exr, args.png)
-        elapsed = time.perf_counter() - start
-        print(f"{args.scene}: {bitmap.width()}x{bitmap.height()} in {elapsed:.1f} s -> {exr}"
-              + (f", {args.png}" if args.png else ""))
-        return 0
+        return args.run(args)
+    except KeyboardInterrupt:
+        print("mi-brdfs: interrupted", file=sys.stderr)
+        return 130
     except Exception as error:       # one clear line, unless --verbose
         if args.verbose:
             raise
-        message = str(error).strip().splitlines()[-1] if str(error).strip() else repr(error)
-        print(f"mi-brdfs: error: {message}", file=sys.stderr)
+        print(f"mi-brdfs: error: {one_line(error)}", file=sys.stderr)
         return 1
+
+
+def one_line(error: BaseException) -> str:
+    """The gist of an error on one line. Mitsuba wraps a Python plugin's
+    exception with its traceback: keep only the exception's own last line."""
+    text = str(error).strip()
+    lines = [line.strip() for line in text.splitlines() if line.strip()]
+    if not lines:
+        return type(error).__name__
+    if "Traceback (most recent call last)" in text:
+        where = re.search(r"At (.+?\(line \d+, col \d+\))", lines[0])
+        return (f"{where.group(1)}: " if where else "") + lines[-1]
+    return " ".join(lines)
 
 
 if __name__ == "__main__":

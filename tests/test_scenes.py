@@ -1,4 +1,4 @@
-"""The scenes load after `import mi_brdfs` and render through the mi-brdfs command."""
+"""Every shipped scene loads after `import mi_brdfs` and renders through mi-brdfs, in both modes."""
 import os
 import subprocess
 import sys
@@ -9,34 +9,70 @@ import pytest
 
 import mitsuba as mi
 
-from mi_brdfs import cli
+from mi_brdfs import cli, exr
 
 SCENES = Path(__file__).resolve().parent.parent / "scenes"
+ALL = sorted(p.stem for p in SCENES.glob("*.xml"))
 
 
-@pytest.mark.parametrize("name", ["lambert", "cook_torrance"])
+@pytest.mark.parametrize("name", ALL)
 @pytest.mark.parametrize("mode", ["hdr", "scanline"])
-def test_scene_loads_and_renders(name, mode):
-    scene = mi.load_file(str(SCENES / f"{name}.xml"), mode=mode, res="32", spp="4")
-    image = np.array(mi.render(scene))
-    assert image.shape == (32, 32, 3)
-    assert np.isfinite(image).all() and image.max() > 0.05
+def test_every_scene_renders_in_both_modes(tmp_path, name, mode):
+    out, png = tmp_path / "x.exr", tmp_path / "x.png"
+    code = cli.main(["render", str(SCENES / f"{name}.xml"), "-D", f"mode={mode}", "-D", "res=24",
+                     "--spp", "2", "--passes", "2", "-q", "-o", str(out), "--png", str(png)])
+    assert code == 0
+    assert sorted(os.listdir(tmp_path)) == ["x.exr", "x.png"]     # no temporary left over
+    image = exr.read_exr(str(out))
+    assert image.shape == (24, 24, 3) and np.isfinite(image).all() and image.max() > 0.01
+    if mode == "scanline":
+        assert image.max() <= 1.0
 
 
-def test_render_command_writes_exr_and_png(tmp_path):
-    exr, png = tmp_path / "a.exr", tmp_path / "a.png"
-    assert cli.main(["render", str(SCENES / "lambert.xml"), "-D", "res=24", "--spp", "2",
-                     "-o", str(exr), "--png", str(png)]) == 0
-    assert sorted(os.listdir(tmp_path)) == ["a.exr", "a.png"]     # no temporary left over
-    back = np.array(mi.Bitmap(str(exr)))
-    assert back.shape == (24, 24, 3) and back.max() > 0
+def run_cli(*args):
+    return subprocess.run([sys.executable, "-m", "mi_brdfs", *args], capture_output=True, text=True)
 
 
-def test_render_command_error_is_one_line(tmp_path):
-    run = subprocess.run([sys.executable, "-m", "mi_brdfs", "render", str(SCENES / "lambert.xml"),
-                          "-D", "mode=bright", "-o", str(tmp_path / "x.exr")],
-                         capture_output=True, text=True)
-    assert run.returncode == 1
-    assert run.stderr.strip().count("\n") == 0
-    assert "lambert: parameter 'mode' = 'bright' is invalid" in run.stderr
-    assert not os.listdir(tmp_path)
+def bad_scene(tmp_path, body):
+    path = tmp_path / "bad.xml"
+    path.write_text(f'<scene version="3.0.0">{body}</scene>')
+    return str(path)
+
+
+ERRORS = {
+    "missing scene": (lambda t: ["render", str(t / "nope.xml")], "scene not found"),
+    "xml error": (lambda t: ["render", bad_scene(t, "<bsdf type='lambert'>")], "Parsing of XML"),
+    "unknown plugin": (lambda t: ["render", bad_scene(t, "<bsdf type='phongy'/>")],
+                       'Plugin "phongy" not found'),
+    "unknown parameter": (lambda t: ["render", bad_scene(t, "<bsdf type='lambert'><float name='zz' value='1'/></bsdf>")],
+                          'unreferenced property in bsdf plugin of type "lambert": - float "zz"'),
+    "bad value": (lambda t: ["render", str(SCENES / "lambert.xml"), "-D", "mode=scanline",
+                             "-D", "res=bad"], 'could not parse integer value "bad"'),
+    "bad parameter value": (lambda t: ["render", bad_scene(t, "<bsdf type='cook_torrance'><float name='k' value='2'/></bsdf>")],
+                            "cook_torrance: parameter 'k' = 2.0 is invalid; valid: [0, 1]"),
+    "unwritable output": (lambda t: ["render", str(SCENES / "lambert.xml"), "-o", str(t / "no" / "x.exr")],
+                          "does not exist"),
+    "bad define": (lambda t: ["render", str(SCENES / "lambert.xml"), "-D", "mode"], "-D expects key=value"),
+    "bad tonemap": (lambda t: ["render", str(SCENES / "lambert.xml"), "--png", str(t / "a.png"),
+                               "--tonemap", "drago"], "unknown --tonemap"),
+}
+
+
+@pytest.mark.parametrize("case", ERRORS)
+def test_errors_are_one_line_and_exit_non_zero(tmp_path, case):
+    args, expected = ERRORS[case]
+    work = tmp_path / "work"
+    work.mkdir()
+    os.chdir(work)
+    run = run_cli(*args(tmp_path))
+    assert run.returncode == 1, run.stderr
+    lines = run.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("mi-brdfs: error: "), run.stderr
+    assert expected in lines[0]
+    assert "Traceback" not in run.stderr
+    assert not os.listdir(work)          # nothing written
+
+
+def test_verbose_shows_the_traceback(tmp_path):
+    run = run_cli("render", str(tmp_path / "nope.xml"), "--verbose")
+    assert run.returncode != 0 and "Traceback" in run.stderr

@@ -3,6 +3,8 @@
     mi-brdfs render SCENE.xml [-D key=value ...] [--spp N] [--passes P] [-o out.exr]
                     [--png out.png [--tonemap NAME] [--exposure EV]] [--seed S]
                     [--variant NAME] [--verbose]
+    mi-brdfs compare REFERENCE.exr TEST.exr [...] -o REPORT_DIR [--max-rmse X ...]
+                    (see mi_brdfs/compare.py; exit 0 pass, 3 a threshold failed)
 
 Registers the plugins, loads the scene with its ``-D`` defaults (as Mitsuba's
 own ``mitsuba`` command does), renders the spp in passes with different seeds
@@ -120,6 +122,21 @@ def cmd_render(args) -> int:
     return 0
 
 
+def cmd_compare(args) -> int:
+    from . import compare
+
+    thresholds = {k: getattr(args, k) for k in compare.THRESHOLDS}
+    results = compare.compare(args.reference, args.tests, args.output, thresholds,
+                              compare.parse_region(args.crop), args.tonemap)
+    for c in results:
+        m = c.metrics
+        print(f"{c.test_path}: rmse {m['rmse']:.4g}, relmse {m['relmse']:.4g}, "
+              f"flip {m['flip']:.4g}, psnr {m['psnr']:.4g} dB -> "
+              + ("PASS" if c.passed else "FAIL: " + "; ".join(c.failures)))
+    print(f"report: {os.path.join(args.output, 'index.html')}")
+    return 0 if all(c.passed for c in results) else 3
+
+
 def parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="mi-brdfs", description=__doc__.splitlines()[0])
     sub = p.add_subparsers(dest="command", required=True)
@@ -138,6 +155,17 @@ def parser() -> argparse.ArgumentParser:
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     r.add_argument("-v", "--verbose", action="store_true", help="show tracebacks on errors")
     r.set_defaults(run=cmd_render)
+
+    c = sub.add_parser("compare", help="compare EXR renders against a reference; HTML report")
+    c.add_argument("reference")
+    c.add_argument("tests", nargs="+")
+    c.add_argument("-o", "--output", required=True, help="report directory")
+    for name in ("max_rmse", "max_relmse", "max_mae", "max_abs", "max_flip", "min_psnr"):
+        c.add_argument("--" + name.replace("_", "-"), dest=name, type=float, default=None)
+    c.add_argument("--crop", default=None, metavar="X,Y,W,H", help="compare this region only")
+    c.add_argument("--tonemap", default="clamp", help="display tone mapping of the pictures")
+    c.add_argument("-v", "--verbose", action="store_true", help="show tracebacks on errors")
+    c.set_defaults(run=cmd_compare)
     return p
 
 

@@ -1,0 +1,165 @@
+"""mi-brdfs compare: metrics by hand, FLIP against NVIDIA's flip command, verdicts, bad input."""
+import json
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mi_brdfs import compare, exr, tonemap
+
+BIN = Path(sys.executable).parent
+
+
+def tiny():
+    r = np.zeros((2, 2, 3))
+    r[0, 0] = [1.0, 0.5, 0.0]
+    r[1, 1] = [0.2, 0.2, 0.2]
+    t = r.copy()
+    t[0, 0, 0] = 1.5        # +0.5 in one value
+    t[1, 0, 2] = 0.1        # +0.1 where r = 0
+    return r, t
+
+
+def test_metrics_by_hand():
+    r, t = tiny()
+    m = compare.metrics(r, t, with_flip=False)
+    n = 12
+    assert m["mse"] == pytest.approx((0.25 + 0.01) / n)
+    assert m["rmse"] == pytest.approx(np.sqrt(0.26 / n))
+    assert m["relmse"] == pytest.approx((0.25 / 1.01**2 + 0.01 / 0.01**2) / n)
+    assert m["mae"] == pytest.approx(0.6 / n)
+    assert m["smape"] == pytest.approx((2 * 0.5 / 2.5 + 2 * 0.1 / 0.1) / n)
+    assert m["max_abs"] == pytest.approx(0.5)
+    assert m["psnr"] == pytest.approx(10 * np.log10(1.0 / (0.26 / n)))
+    red = m["channels"]["R"]
+    assert red["mse"] == pytest.approx(0.25 / 4) and red["max_abs"] == pytest.approx(0.5)
+    assert m["channels"]["G"]["mse"] == 0 and m["channels"]["G"]["psnr"] == np.inf
+
+
+def flip_cli(ref_path, test_path, tmp_path):
+    out = subprocess.run([str(BIN / "flip"), "-r", str(ref_path), "-t", str(test_path),
+                          "-d", str(tmp_path / "flipout")], capture_output=True, text=True)
+    return float(re.search(r"Mean: ([0-9.]+)", out.stdout).group(1))
+
+
+def test_flip_hdr_matches_flip_command(tmp_path):
+    rng = np.random.default_rng(5)
+    r = rng.lognormal(size=(32, 32, 3)).astype(np.float32)
+    t = (r * rng.uniform(0.7, 1.3, size=r.shape)).astype(np.float32)
+    exr.write_exr(str(tmp_path / "r.exr"), r)
+    exr.write_exr(str(tmp_path / "t.exr"), t)
+    value, _, mode = compare.flip(r.astype(np.float64), t.astype(np.float64))
+    assert mode == "HDR"
+    assert value == pytest.approx(flip_cli(tmp_path / "r.exr", tmp_path / "t.exr", tmp_path), abs=2e-6)
+
+
+def test_flip_ldr_matches_flip_command_on_srgb_pngs(tmp_path):
+    rng = np.random.default_rng(6)
+    r = rng.uniform(0, 1, size=(32, 32, 3))
+    t = np.clip(r + rng.normal(0, 0.05, size=r.shape), 0, 1)
+    # The same quantisation the flip command sees through the PNGs.
+    r8, t8 = tonemap.to_srgb8(r), tonemap.to_srgb8(t)
+    for name, img in (("r.png", r8), ("t.png", t8)):
+        _write_png8(tmp_path / name, img)
+    decode = lambda v: np.where(v <= 0.04045, v / 12.92, ((v + 0.055) / 1.055) ** 2.4)
+    value, _, mode = compare.flip(decode(r8 / 255.0), decode(t8 / 255.0))
+    assert mode == "LDR"
+    assert value == pytest.approx(flip_cli(tmp_path / "r.png", tmp_path / "t.png", tmp_path), abs=1e-3)
+
+
+def _write_png8(path, data):
+    import mitsuba as mi
+    mi.Bitmap(np.ascontiguousarray(data), mi.Bitmap.PixelFormat.RGB).write(str(path))
+
+
+def write_pair(tmp_path, r, t):
+    exr.write_exr(str(tmp_path / "r.exr"), r)
+    exr.write_exr(str(tmp_path / "t.exr"), t)
+    return str(tmp_path / "r.exr"), str(tmp_path / "t.exr")
+
+
+def run(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "mi_brdfs", "compare", *args],
+                          capture_output=True, text=True, cwd=cwd)
+
+
+def test_self_comparison_passes_with_zero_error(tmp_path):
+    rng = np.random.default_rng(1)
+    r = rng.uniform(0, 2, size=(24, 24, 3))
+    ref, _ = write_pair(tmp_path, r, r)
+    out = run(ref, ref, "-o", str(tmp_path / "rep"), "--max-rmse", "0", "--max-flip", "0")
+    assert out.returncode == 0, out.stderr
+    m = json.loads((tmp_path / "rep" / "metrics.json").read_text())["tests"][0]
+    assert m["passed"]
+    for key in ("mse", "rmse", "relmse", "mae", "smape", "max_abs", "flip"):
+        assert m["metrics"][key] == 0, key
+    assert m["metrics"]["psnr"] == float("inf")
+    files = set(os.listdir(tmp_path / "rep"))
+    assert {"index.html", "metrics.json", "metrics.csv", "reference.png", "test0_test.png",
+            "test0_difference.png", "test0_relative.png", "test0_flip.png"} <= files
+
+
+def test_perturbed_copy_moves_metrics_and_fails_thresholds(tmp_path):
+    rng = np.random.default_rng(2)
+    r = rng.uniform(0.1, 1, size=(24, 24, 3))
+    small = r * 1.01
+    big = r * 1.2
+    exr.write_exr(str(tmp_path / "r.exr"), r)
+    exr.write_exr(str(tmp_path / "s.exr"), small)
+    exr.write_exr(str(tmp_path / "b.exr"), big)
+    out = run(str(tmp_path / "r.exr"), str(tmp_path / "s.exr"), str(tmp_path / "b.exr"),
+              "-o", str(tmp_path / "rep"), "--max-rmse", "0.05")
+    assert out.returncode == 3, out.stderr
+    tests = json.loads((tmp_path / "rep" / "metrics.json").read_text())["tests"]
+    s, b = tests[0]["metrics"], tests[1]["metrics"]
+    assert tests[0]["passed"] and not tests[1]["passed"]
+    for key in ("mse", "rmse", "relmse", "mae", "smape", "max_abs", "flip"):
+        assert 0 < s[key] < b[key], key
+    assert b["psnr"] < s["psnr"]
+    assert b["mae"] == pytest.approx(0.2 * r.mean(), rel=1e-5)
+    assert "rmse" in tests[1]["failures"][0]
+    csv_text = (tmp_path / "rep" / "metrics.csv").read_text().splitlines()
+    assert len(csv_text) == 1 + 2 * 4 and csv_text[0].startswith("test,channel,mse")
+
+
+def test_crop(tmp_path):
+    r = np.zeros((10, 10, 3))
+    t = r.copy()
+    t[0, 0] = 1.0                       # outside the crop
+    ref, test = write_pair(tmp_path, r, t)
+    res = compare.compare(ref, [test], str(tmp_path / "rep"), region=(2, 2, 5, 5))
+    assert res[0].metrics["max_abs"] == 0
+
+
+def bad_cases(tmp_path):
+    good = np.ones((4, 4, 3))
+    exr.write_exr(str(tmp_path / "good.exr"), good)
+    exr.write_exr(str(tmp_path / "small.exr"), np.ones((2, 4, 3)))
+    nan = good.copy()
+    nan[0, 0, 1] = np.nan
+    nan[1, 1] = np.inf
+    exr.write_exr(str(tmp_path / "nan.exr"), nan)
+    (tmp_path / "text.exr").write_text("hello")
+    g = str(tmp_path / "good.exr")
+    return {
+        "missing": ([g, str(tmp_path / "none.exr")], "no such file"),
+        "not exr": ([g, str(tmp_path / "text.exr")], "not a readable EXR"),
+        "resolution": ([g, str(tmp_path / "small.exr")], "is 4x2 but the reference"),
+        "nan": ([g, str(tmp_path / "nan.exr")], "2 pixels are not finite (1 NaN, 1 Inf)"),
+        "crop": ([g, g, "--crop", "3,3,4,4"], "outside the 4x4 image"),
+    }
+
+
+@pytest.mark.parametrize("case", ["missing", "not exr", "resolution", "nan", "crop"])
+def test_bad_input(tmp_path, case):
+    args, message = bad_cases(tmp_path)[case]
+    out = run(*args, "-o", str(tmp_path / "rep"))
+    assert out.returncode == 1
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1 and message in lines[0], out.stderr
+    leftovers = [p for p in os.listdir(tmp_path) if "rep" in p]
+    assert leftovers == []

@@ -137,6 +137,18 @@ def cmd_compare(args) -> int:
     return 0 if all(c.passed for c in results) else 3
 
 
+def cmd_validate(args) -> int:
+    from . import validate
+
+    log = (lambda *a: None) if args.quiet else (lambda msg: print(msg, file=sys.stderr))
+    results = validate.validate(args.output, quick=args.quick, log=log)
+    failed_chi2 = [r for r in results["sampling"] if not r["passed"]]
+    over = [r for r in results["furnace"] if r["exceeds_1"]]
+    print(f"report: {os.path.join(args.output, 'index.html')} ({results['seconds']:.0f} s); "
+          f"{len(failed_chi2)} chi-square failures; {len(over)} furnace rows above 1")
+    return 0
+
+
 def parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="mi-brdfs", description=__doc__.splitlines()[0])
     sub = p.add_subparsers(dest="command", required=True)
@@ -166,6 +178,13 @@ def parser() -> argparse.ArgumentParser:
     c.add_argument("--tonemap", default="clamp", help="display tone mapping of the pictures")
     c.add_argument("-v", "--verbose", action="store_true", help="show tracebacks on errors")
     c.set_defaults(run=cmd_compare)
+
+    v = sub.add_parser("validate", help="run the project's validation; HTML report")
+    v.add_argument("-o", "--output", required=True, help="report directory")
+    v.add_argument("--quick", action="store_true", help="reduced grid and sizes (CI)")
+    v.add_argument("-q", "--quiet", action="store_true")
+    v.add_argument("-v", "--verbose", action="store_true", help="show tracebacks on errors")
+    v.set_defaults(run=cmd_validate)
     return p
 
 

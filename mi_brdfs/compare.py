@@ -176,9 +176,10 @@ def _save_map(path: str, data: np.ndarray, cmap: str, vmin: float, vmax: float, 
 
 
 def pictures(directory: str, prefix: str, ref: np.ndarray, test: np.ndarray,
-             operator: str, flip_map: np.ndarray | None) -> dict[str, str]:
-    """Write the report's PNGs; returns {kind: file name}."""
-    files = {"reference": "reference.png", "test": f"{prefix}_test.png"}
+             operator: str, flip_map: np.ndarray | None,
+             ref_name: str = "reference.png") -> dict[str, str]:
+    """Write the report's PNGs (the reference once, as ref_name); returns {kind: file name}."""
+    files = {"reference": ref_name, "test": f"{prefix}_test.png"}
     if not os.path.exists(os.path.join(directory, files["reference"])):
         tonemap.write_png(os.path.join(directory, files["reference"]), ref, operator)
     tonemap.write_png(os.path.join(directory, files["test"]), test, operator)

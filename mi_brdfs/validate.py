@@ -1,0 +1,434 @@
+"""The project's own validation, as one HTML report.
+
+    mi-brdfs validate -o REPORT_DIR [--quick]
+
+Sections:
+
+1. **Built-in equivalence** — the same scene rendered with a course model and
+   with the Mitsuba built-in it should match, in ``passes`` independent passes
+   each. "Identical up to noise" is judged per pixel by Welch's t-test of the
+   two pass means against their variances, with a Bonferroni correction over
+   the pixels (as Mitsuba's own render tests judge a render against its
+   reference's variance), not by a fixed threshold.
+2. **White furnace** — each model, both modes, white colours: the directional
+   albedo E(theta_i) = integral of eval(wi, wo) dwo, by stratified quadrature
+   (independent of the plugin's sampling) and by rendering the BSDF alone (a
+   large plane seen by an orthographic camera at theta_i) inside a uniform white
+   environment; the two must agree. Albedos above 1 are flagged with by how much and where.
+3. **Sampling** — Mitsuba's chi-square test (p-value) for each model's grid, and
+   the variance of the sample weights (0 would be perfect importance sampling).
+4. **Lobes** — eval (f·cos theta_o) in the plane of incidence for several
+   incident angles, both modes, as polar plots.
+
+The report is written into a temporary directory and moved into place when
+complete. ``--quick`` runs a reduced grid at reduced sizes (for CI).
+"""
+from __future__ import annotations
+
+import html
+import json
+import math
+import os
+import shutil
+import tempfile
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import catalog, compare
+
+MODES = ("hdr", "scanline")
+ALPHA = 0.01                      # significance level of every statistical test
+
+
+@dataclass
+class Size:
+    """How much work each section does."""
+    res: int
+    passes: int
+    spp: int                      # per pass
+    furnace_spp: int              # per pixel of the 8x8 furnace renders
+    quad: tuple[int, int]         # quadrature strata (cos theta, phi)
+    angles: tuple[float, ...]
+    chi2_samples: int
+    weight_samples: int
+
+
+QUICK = Size(res=48, passes=16, spp=16, furnace_spp=256, quad=(256, 1024),
+             angles=(0, 30, 60, 75, 85, 89), chi2_samples=200_000, weight_samples=100_000)
+FULL = Size(res=128, passes=32, spp=64, furnace_spp=4096, quad=(1024, 4096),
+            angles=(0, 15, 30, 45, 60, 70, 75, 80, 85, 88, 89),
+            chi2_samples=1_000_000, weight_samples=1_000_000)
+
+
+# ----------------------------------------------------------------------------
+#  1. Built-in equivalence
+# ----------------------------------------------------------------------------
+
+ETA = 1.5
+F0_GLASS = ((ETA - 1) / (ETA + 1)) ** 2
+
+EQUIVALENCES = [
+    ("lambert vs diffuse", {"type": "lambert", "reflectance": 0.7},
+     {"type": "diffuse", "reflectance": 0.7},
+     "identical up to noise"),
+    ("cook_torrance (k=0, f0=1, smith, ggx) vs roughconductor (ggx)",
+     {"type": "cook_torrance", "k": 0.0, "f0": 1.0, "geometry": "smith", "distribution": "ggx",
+      "alpha": 0.3},
+     {"type": "roughconductor", "distribution": "ggx", "alpha": 0.3},
+     "identical up to noise"),
+    ("cook_torrance (k=0, f0=1, smith, beckmann) vs roughconductor (beckmann)",
+     {"type": "cook_torrance", "k": 0.0, "f0": 1.0, "geometry": "smith",
+      "distribution": "beckmann", "alpha": 0.3},
+     {"type": "roughconductor", "distribution": "beckmann", "alpha": 0.3},
+     "identical up to the Beckmann G1 fit (Mitsuba's rational fit, within 0.35 % per G1)"),
+    (f"cook_torrance (k=0, f0={F0_GLASS:.2f}, smith, ggx) vs roughplastic (diffuse 0)",
+     {"type": "cook_torrance", "k": 0.0, "f0": F0_GLASS, "geometry": "smith",
+      "distribution": "ggx", "alpha": 0.3},
+     {"type": "roughplastic", "distribution": "ggx", "alpha": 0.3, "diffuse_reflectance": 0.0,
+      "int_ior": ETA, "ext_ior": 1.0},
+     "differing only by Schlick's approximation (visible at grazing angles: the rim)"),
+]
+
+
+def _sphere_scene(bsdf: dict, res: int, sensor: str = "perspective", env: float = 0.5,
+                  light: bool = True, max_depth: int = 2) -> dict:
+    import mitsuba as mi
+    T = mi.ScalarTransform4f
+    scene = {
+        "type": "scene",
+        "integrator": {"type": "path", "max_depth": max_depth},
+        "sensor": {"type": sensor,
+                   "to_world": T().look_at(origin=[0, 0, 4], target=[0, 0, 0], up=[0, 1, 0])
+                   @ (T().scale([1.05, 1.05, 1]) if sensor == "orthographic" else T()),
+                   "film": {"type": "hdrfilm", "width": res, "height": res,
+                            "rfilter": {"type": "box"}},
+                   "sampler": {"type": "independent"}},
+        "sphere": {"type": "sphere", "bsdf": bsdf},
+        "env": {"type": "constant", "radiance": {"type": "rgb", "value": env}},
+    }
+    if sensor == "perspective":
+        scene["sensor"]["fov"] = 34
+    if light:
+        scene["light"] = {"type": "point", "position": [2.0, 2.0, 3.0],
+                          "intensity": {"type": "rgb", "value": 15.0}}
+    return scene
+
+
+def render_passes(scene_dict: dict, passes: int, spp: int, seed0: int = 0) -> np.ndarray:
+    """(passes, H, W, 3) independent renders."""
+    import mitsuba as mi
+    scene = mi.load_dict(scene_dict)
+    return np.stack([np.array(mi.render(scene, spp=spp, seed=seed0 + i))[..., :3]
+                     for i in range(passes)]).astype(np.float64)
+
+
+def welch_test(a: np.ndarray, b: np.ndarray) -> dict:
+    """Per-pixel Welch t-test of the pass means (channel mean), Bonferroni over pixels."""
+    from scipy import stats
+
+    a, b = a.mean(axis=-1), b.mean(axis=-1)          # (passes, H, W)
+    n = a.shape[0]
+    ma, mb = a.mean(0), b.mean(0)
+    va, vb = a.var(0, ddof=1) / n, b.var(0, ddof=1) / n
+    se2 = va + vb
+    both_zero = se2 <= 0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(both_zero, 0.0, (ma - mb) / np.sqrt(np.where(both_zero, 1, se2)))
+        df = np.where(both_zero, 1.0,
+                      se2**2 / (va**2 / (n - 1) + vb**2 / (n - 1) + 1e-300))
+    p = np.where(both_zero & (ma != mb), 0.0, 2 * stats.t.sf(np.abs(t), df))
+    pixels = p.size
+    significant = int(np.count_nonzero(p < ALPHA / pixels))
+    mask = (ma > 1e-3) | (mb > 1e-3)
+    rel = float(np.mean(np.abs(ma - mb)[mask] / np.maximum(ma, mb)[mask])) if mask.any() else 0.0
+    return {"pixels": pixels, "significant_pixels": significant, "min_p": float(p.min()),
+            "bonferroni_alpha": ALPHA / pixels, "identical": significant == 0,
+            "mean_relative_difference": rel}
+
+
+def equivalence_section(size: Size, out: str) -> list[dict]:
+    results = []
+    for i, (title, ours, builtin, expected) in enumerate(EQUIVALENCES):
+        a = render_passes(_sphere_scene(ours, size.res), size.passes, size.spp, seed0=0)
+        b = render_passes(_sphere_scene(builtin, size.res), size.passes, size.spp, seed0=1000)
+        test = welch_test(a, b)
+        ref_img, test_img = b.mean(0), a.mean(0)          # built-in, ours
+        m = compare.metrics(ref_img, test_img, with_flip=False)
+        m["flip"], flip_map, m["flip_mode"] = compare.flip(ref_img, test_img)
+        files = compare.pictures(out, f"eq{i}", ref_img, test_img, "clamp", flip_map,
+                                 ref_name=f"eq{i}_builtin.png")
+        results.append({"title": title, "expected": expected, "test": test,
+                        "metrics": {k: v for k, v in m.items() if k != "channels"},
+                        "files": files})
+    return results
+
+
+# ----------------------------------------------------------------------------
+#  2. White furnace
+# ----------------------------------------------------------------------------
+
+def quadrature_albedo(bsdf, angles, strata: tuple[int, int], seed: int = 7) -> np.ndarray:
+    """E(theta_i) per angle (channel max), stratified jittered uniform-hemisphere quadrature."""
+    import drjit as dr
+    import mitsuba as mi
+
+    nu, nv = strata
+    rng = np.random.default_rng(seed)
+    u = ((np.arange(nu)[:, None] + rng.random((nu, nv))) / nu).ravel()
+    v = ((np.arange(nv)[None, :] + rng.random((nu, nv))) / nv).ravel()
+    s = np.sqrt(np.maximum(0.0, 1.0 - u * u))
+    wo = mi.Vector3f(s * np.cos(2 * np.pi * v), s * np.sin(2 * np.pi * v), u)
+    out = []
+    for theta in angles:
+        t = math.radians(theta)
+        si = dr.zeros(mi.SurfaceInteraction3f)
+        si.wi = mi.Vector3f(dr.opaque(mi.Float, math.sin(t)), 0.0, dr.opaque(mi.Float, math.cos(t)))
+        value = bsdf.eval(mi.BSDFContext(), si, wo)
+        e = [float(dr.sum(mi.Float64(value[c]))[0]) * 2 * np.pi / (nu * nv) for c in range(3)]
+        out.append(max(e))
+    return np.array(out)
+
+
+def rendered_albedo(config: dict, angles, size: Size) -> np.ndarray:
+    """E(theta_i) by rendering: a large plane with the BSDF inside a uniform white
+    environment, seen by an orthographic camera at theta_i (every pixel sees
+    the surface at exactly that angle), with direct lighting only."""
+    import mitsuba as mi
+    T = mi.ScalarTransform4f
+    out = []
+    for a in angles:
+        t = math.radians(a)
+        scene = mi.load_dict({
+            "type": "scene",
+            "integrator": {"type": "path", "max_depth": 2, "hide_emitters": True},
+            "sensor": {"type": "orthographic",
+                       "to_world": T().look_at(origin=[100 * math.sin(t), 0, 100 * math.cos(t)],
+                                               target=[0, 0, 0], up=[0, 1, 0]) @ T().scale(0.25),
+                       "film": {"type": "hdrfilm", "width": 8, "height": 8,
+                                "rfilter": {"type": "box"}},
+                       "sampler": {"type": "independent"}},
+            "plane": {"type": "rectangle", "bsdf": config, "to_world": T().scale(1000.0)},
+            "env": {"type": "constant", "radiance": {"type": "rgb", "value": 1.0}},
+        })
+        image = np.array(mi.render(scene, spp=size.furnace_spp))[..., :3]
+        out.append(float(image.mean(axis=(0, 1)).max()))
+    return np.array(out)
+
+
+def furnace_section(size: Size, out: str, models: dict) -> list[dict]:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import mitsuba as mi
+
+    rows = []
+    for name, configs in models.items():
+        for label, base in configs:
+            fig, ax = plt.subplots(figsize=(5, 3.4), dpi=90)
+            for mode, colour in zip(MODES, ("C0", "C3")):
+                config = {**base, "mode": mode}
+                quad = quadrature_albedo(mi.load_dict(config), size.angles, size.quad)
+                rend = rendered_albedo(config, size.angles, size)
+                ax.plot(size.angles, quad, "-o", color=colour, ms=3, label=f"{mode}: quadrature")
+                ax.plot(size.angles, rend, "x", color=colour, label=f"{mode}: render")
+                worst = int(np.argmax(quad))
+                rows.append({
+                    "model": name, "config": label, "mode": mode,
+                    "angles": list(size.angles), "quadrature": quad.tolist(),
+                    "render": rend.tolist(), "max": float(quad.max()),
+                    "max_at": size.angles[worst], "mean": float(quad.mean()),
+                    "min": float(quad.min()),
+                    "render_vs_quadrature": float(np.nanmax(np.abs(rend - quad))),
+                    "exceeds_1": bool(quad.max() > 1.005),
+                    "loses_energy": bool(quad.max() < 0.99),
+                })
+            ax.axhline(1.0, color="k", lw=0.6)
+            ax.set_xlabel("incident angle θ_i (degrees)")
+            ax.set_ylabel("directional albedo")
+            ax.set_title(f"{name}: {label}", fontsize=9)
+            ax.legend(fontsize=7)
+            fig.tight_layout()
+            rows[-1]["plot"] = rows[-2]["plot"] = f"furnace_{name}_{len(rows)}.png"
+            fig.savefig(os.path.join(out, rows[-1]["plot"]))
+            plt.close(fig)
+    return rows
+
+
+# ----------------------------------------------------------------------------
+#  3. Sampling
+# ----------------------------------------------------------------------------
+
+def sampling_section(size: Size, models: dict) -> list[dict]:
+    import drjit as dr
+    import mitsuba as mi
+
+    count = sum(len(angles) for configs in models.values() for _, _, angles in configs)
+    rows = []
+    for name, configs in models.items():
+        for label, config, angles in configs:
+            bsdf = mi.load_dict(config)
+            for theta in angles:
+                t = math.radians(theta)
+                wi = mi.ScalarVector3f(math.sin(t), 0.0, math.cos(t))
+                sample_func, pdf_func = mi.chi2.BSDFAdapter(config["type"], config, wi=wi)
+                chi2 = mi.chi2.ChiSquareTest(domain=mi.chi2.SphericalDomain(),
+                                             pdf_func=pdf_func, sample_func=sample_func,
+                                             sample_dim=3, sample_count=size.chi2_samples,
+                                             res=101, ires=16)
+                passed = bool(chi2.run(significance_level=ALPHA, test_count=count, quiet=True))
+                # Sample weights at this incident angle.
+                n = size.weight_samples
+                rng = np.random.default_rng(11)
+                si = dr.zeros(mi.SurfaceInteraction3f, n)
+                si.wi = mi.Vector3f(wi)
+                _, weight = bsdf.sample(mi.BSDFContext(), si, mi.Float(rng.random(n)),
+                                        mi.Point2f(rng.random(n), rng.random(n)))
+                w = np.array(weight).mean(axis=0)
+                rows.append({"model": name, "config": label, "theta": theta, "passed": passed,
+                             "p_value": float(getattr(chi2, "p_value", float("nan"))),
+                             "weight_mean": float(w.mean()), "weight_variance": float(w.var())})
+    return rows
+
+
+# ----------------------------------------------------------------------------
+#  4. Lobes
+# ----------------------------------------------------------------------------
+
+def lobe_section(out: str, models: dict, angles=(0, 30, 60, 80)) -> list[dict]:
+    import drjit as dr
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import mitsuba as mi
+
+    theta_o = np.radians(np.linspace(-89.5, 89.5, 359))      # signed, in the plane of incidence
+    wo = mi.Vector3f(np.sin(theta_o), 0.0, np.cos(theta_o))
+    rows = []
+    for name, base in models.items():
+        fig, axes = plt.subplots(1, 2, subplot_kw={"projection": "polar"}, figsize=(8, 3.6), dpi=90)
+        for ax, mode in zip(axes, MODES):
+            bsdf = mi.load_dict({**base, "mode": mode})
+            for a in angles:
+                t = math.radians(a)
+                si = dr.zeros(mi.SurfaceInteraction3f)
+                si.wi = mi.Vector3f(-math.sin(t), 0.0, math.cos(t))     # viewer on the left
+                value = np.array(bsdf.eval(mi.BSDFContext(), si, wo)).mean(axis=0)
+                ax.plot(theta_o, value, label=f"θ_i = {a}°")
+            ax.set_theta_zero_location("N")
+            ax.set_thetamin(-90)
+            ax.set_thetamax(90)
+            ax.set_title(f"{name} ({mode})", fontsize=9)
+        axes[1].legend(fontsize=7, loc="lower right", bbox_to_anchor=(1.35, 0.0))
+        fig.tight_layout()
+        file = f"lobe_{name}.png"
+        fig.savefig(os.path.join(out, file))
+        plt.close(fig)
+        rows.append({"model": name, "plot": file})
+    return rows
+
+
+# ----------------------------------------------------------------------------
+#  The report
+# ----------------------------------------------------------------------------
+
+def _html(results: dict) -> str:
+    esc = html.escape
+    parts = [f"""<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><title>mi_brdfs validation</title>
+<style>
+body {{ font-family: sans-serif; margin: 2em; max-width: 80em; }}
+table {{ border-collapse: collapse; margin: 1em 0; }}
+td, th {{ border: 1px solid #ccc; padding: 0.2em 0.5em; text-align: right; }}
+td:first-child, td:nth-child(2) {{ text-align: left; }}
+.bad {{ color: #b00; font-weight: bold; }} .good {{ color: #070; }}
+.figs {{ display: flex; flex-wrap: wrap; gap: 0.8em; }} img {{ max-width: 380px; }}
+</style></head><body>
+<h1>mi_brdfs validation</h1>
+<p>{esc(results['size'])} run, {results['seconds']:.0f} s; Mitsuba {esc(results['mitsuba'])},
+variant {esc(results['variant'])}. Statistical tests at α = {ALPHA}.</p>
+<h2>1. Built-in equivalence</h2>"""]
+    for r in results["equivalence"]:
+        t = r["test"]
+        verdict = ("identical up to noise" if t["identical"] else
+                   f"differs: {t['significant_pixels']} of {t['pixels']} pixels significant")
+        cls = "good" if t["identical"] else "bad"
+        parts.append(
+            f"<h3>{esc(r['title'])}</h3><p>Expected: {esc(r['expected'])}. "
+            f"Measured: <span class='{cls}'>{esc(verdict)}</span> (Welch t-test per pixel, "
+            f"Bonferroni α/N = {t['bonferroni_alpha']:.2g}, min p = {t['min_p']:.3g}); "
+            f"mean relative difference {100 * t['mean_relative_difference']:.3f} %; "
+            f"RMSE {r['metrics']['rmse']:.4g}, FLIP {r['metrics']['flip']:.4g}.</p>"
+            "<div class='figs'>" + "".join(
+                f"<figure><img src='{esc(f)}' alt='{k}'><figcaption>{k}</figcaption></figure>"
+                for k, f in r["files"].items()) + "</div>")
+    parts.append("<h2>2. White furnace</h2><table><tr><th>model</th><th>configuration</th>"
+                 "<th>mode</th><th>max albedo</th><th>at θ_i</th><th>mean</th><th>min</th>"
+                 "<th>|render − quadrature|</th><th>flag</th></tr>")
+    for r in results["furnace"]:
+        if r["exceeds_1"]:
+            flag = (f"<span class='bad'>exceeds 1 by {100 * (r['max'] - 1):.1f} % "
+                    f"at {r['max_at']:g}°</span>")
+        elif r["loses_energy"]:
+            flag = f"loses {100 * (1 - r['max']):.1f} % or more"
+        else:
+            flag = "<span class='good'>≤ 1</span>"
+        parts.append(f"<tr><td>{esc(r['model'])}</td><td>{esc(r['config'])}</td><td>{r['mode']}</td>"
+                     f"<td>{r['max']:.4f}</td><td>{r['max_at']:g}°</td><td>{r['mean']:.4f}</td>"
+                     f"<td>{r['min']:.4f}</td><td>{r['render_vs_quadrature']:.4f}</td>"
+                     f"<td>{flag}</td></tr>")
+    plots = sorted({r["plot"] for r in results["furnace"]})
+    parts.append("</table><div class='figs'>" + "".join(f"<img src='{p}' alt='furnace'>"
+                                                        for p in plots) + "</div>")
+    parts.append("<h2>3. Sampling</h2><table><tr><th>model</th><th>configuration</th>"
+                 "<th>θ_i</th><th>χ² p-value</th><th>verdict</th><th>mean weight</th>"
+                 "<th>weight variance</th></tr>")
+    for r in results["sampling"]:
+        cls, word = ("good", "pass") if r["passed"] else ("bad", "FAIL")
+        parts.append(f"<tr><td>{esc(r['model'])}</td><td>{esc(r['config'])}</td>"
+                     f"<td>{r['theta']:g}°</td><td>{r['p_value']:.3g}</td>"
+                     f"<td class='{cls}'>{word}</td><td>{r['weight_mean']:.4g}</td>"
+                     f"<td>{r['weight_variance']:.4g}</td></tr>")
+    parts.append("</table><h2>4. Lobes (eval = f·cos θ_o in the plane of incidence; "
+                 "viewer on the left)</h2><div class='figs'>")
+    parts += [f"<img src='{r['plot']}' alt='lobe {esc(r['model'])}'>" for r in results["lobes"]]
+    parts.append("</div></body></html>\n")
+    return "".join(parts)
+
+
+def validate(out_dir: str, quick: bool = False, log=print) -> dict:
+    """Run every section and write the report to out_dir (atomically)."""
+    import mitsuba as mi
+
+    import mi_brdfs  # noqa: F401  (plugins registered)
+
+    size = QUICK if quick else FULL
+    furnace = catalog.quick(catalog.FURNACE) if quick else catalog.FURNACE
+    chi2 = catalog.quick(catalog.CHI2, 2) if quick else catalog.CHI2
+    parent = os.path.dirname(os.path.abspath(out_dir))
+    if not os.path.isdir(parent):
+        raise ValueError(f"cannot write {out_dir}: directory {parent} does not exist")
+    tmp = tempfile.mkdtemp(prefix=".tmp-validate-", dir=parent)
+    start = time.perf_counter()
+    try:
+        results = {"size": "quick" if quick else "full", "mitsuba": mi.__version__,
+                   "variant": mi.variant()}
+        log("built-in equivalence ...")
+        results["equivalence"] = equivalence_section(size, tmp)
+        log("white furnace ...")
+        results["furnace"] = furnace_section(size, tmp, furnace)
+        log("sampling ...")
+        results["sampling"] = sampling_section(size, chi2)
+        log("lobes ...")
+        results["lobes"] = lobe_section(tmp, catalog.LOBES)
+        results["seconds"] = time.perf_counter() - start
+        with open(os.path.join(tmp, "results.json"), "w") as f:
+            json.dump(results, f, indent=1)
+        with open(os.path.join(tmp, "index.html"), "w") as f:
+            f.write(_html(results))
+        compare._replace_dir(tmp, out_dir)
+    finally:
+        if os.path.isdir(tmp):
+            shutil.rmtree(tmp)
+    return results

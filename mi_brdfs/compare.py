@@ -255,7 +255,7 @@ td, th {{ border: 1px solid #ccc; padding: 0.25em 0.6em; text-align: right; }}
 tr.fail td:last-child, p.fail {{ color: #b00; font-weight: bold; }}
 tr.pass td:last-child, p.pass {{ color: #070; }}
 .figs {{ display: flex; flex-wrap: wrap; gap: 1em; }}
-figure {{ margin: 0; }} figure img {{ max-width: 360px; image-rendering: pixelated; }}
+figure {{ margin: 0; }} figure img {{ width: 320px; image-rendering: pixelated; }}
 </style></head><body>
 <h1>Comparison against {esc(ref_path)}</h1>
 <p>Tone mapping for display: {esc(operator)}; region: {crop_text}; thresholds: {esc(limits)}.</p>

@@ -343,7 +343,7 @@ table {{ border-collapse: collapse; margin: 1em 0; }}
 td, th {{ border: 1px solid #ccc; padding: 0.2em 0.5em; text-align: right; }}
 td:first-child, td:nth-child(2) {{ text-align: left; }}
 .bad {{ color: #b00; font-weight: bold; }} .good {{ color: #070; }}
-.figs {{ display: flex; flex-wrap: wrap; gap: 0.8em; }} img {{ max-width: 380px; }}
+.figs {{ display: flex; flex-wrap: wrap; gap: 0.8em; }} .figs img {{ width: 300px; image-rendering: pixelated; }}
 </style></head><body>
 <h1>mi_brdfs validation</h1>
 <p>{esc(results['size'])} run, {results['seconds']:.0f} s; Mitsuba {esc(results['mitsuba'])},

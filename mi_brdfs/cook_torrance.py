@@ -41,10 +41,20 @@
        (G1(w_r)·G1(d): the lecture's g_GGX for ggx, the exact Smith Beckmann
        G1 for beckmann and blinn).
      - ``"cook_torrance"``
+   * - ``sample_visible``
+     - bool
+     - Beckmann and GGX: sample the visible normals (else the full
+       distribution D(m)·cos(theta_m)); Blinn always samples the latter.
+     - true
    * - ``mode``
      - string
      - ``"hdr"`` or ``"scanline"``.
      - ``"hdr"``
+   * - ``sampling``
+     - string
+     - ``"lobe"`` (the importance sampling below) or ``"cosine"`` (every
+       lobe from the cosine hemisphere; for benchmarks).
+     - ``"lobe"``
 
 With w_r the viewer (``si.wi``), d the light (``wo``), h = normalize(d + w_r),
 and D, G, F as in :mod:`mi_brdfs.microfacet`, ``eval`` returns::
@@ -129,6 +139,7 @@ class CookTorrance(BRDF):
         self.m_f0 = reader.scalar("f0", 0.04, 0.0, 1.0)                  # Schlick's F_0
         alpha_max = 1.0 if self.distribution == "blinn" else None        # Blinn: 2/rho²-2 >= 0
         self.m_alpha = reader.texture("alpha", 0.3, 0.0, alpha_max)      # rho
+        self.sample_visible = bool(reader.props.get("sample_visible", True))
 
     def traverse(self, cb):
         flags = mi.ParamFlags.Differentiable
@@ -175,7 +186,7 @@ class CookTorrance(BRDF):
     # --- specular sampling ----------------------------------------------------
     def mitsuba_distribution(self, si, active):
         kind = getattr(mi.MicrofacetType, MICROFACET_TYPE[self.distribution])
-        return mi.MicrofacetDistribution(kind, self.alpha(si, active), True)
+        return mi.MicrofacetDistribution(kind, self.alpha(si, active), self.sample_visible)
 
     def sample_specular(self, si, sample2, active):
         # Sample m, the microfacet normal, then reflect the viewer about it.

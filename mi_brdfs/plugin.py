@@ -28,6 +28,7 @@ import mitsuba as mi
 import numpy as np
 
 MODES = ("scanline", "hdr")
+SAMPLINGS = ("lobe", "cosine")    # each lobe's own importance sampling, or cosine for all
 
 
 class ParameterError(ValueError):
@@ -141,6 +142,9 @@ class BRDF:
         mi.BSDF.__init__(self, props)
         reader = Reader(self.name, props)
         self.mode = reader.choice("mode", "hdr", MODES)
+        # "cosine" samples every lobe from the cosine hemisphere: for measuring
+        # what importance sampling gains (mi-brdfs bench), not for rendering.
+        self.sampling = reader.choice("sampling", "lobe", SAMPLINGS)
         self.read(reader)
         self.update_lobes()
 
@@ -220,7 +224,9 @@ class BRDF:
 
         p_s = self.specular_probability(si, use_d, use_s, active)
         pick_s = mi.Bool(sample1 < p_s)
-        if use_d and use_s:
+        if self.sampling == "cosine":
+            wo = mi.warp.square_to_cosine_hemisphere(sample2)
+        elif use_d and use_s:
             wo = dr.select(pick_s,
                            self.sample_specular(si, sample2, active & pick_s),
                            mi.warp.square_to_cosine_hemisphere(sample2))
@@ -266,6 +272,8 @@ class BRDF:
         cos_i = mi.Frame3f.cos_theta(si.wi)
         cos_o = mi.Frame3f.cos_theta(wo)
         active = mi.Bool(active) & (cos_i > 0) & (cos_o > 0)
+        if self.sampling == "cosine":
+            return dr.select(active, mi.warp.square_to_cosine_hemisphere_pdf(wo), 0.0)
         p_s = self.specular_probability(si, use_d, use_s, active)
         pdf = mi.Float(0.0)
         if use_d:

@@ -48,6 +48,12 @@ def _cook_torrance_cases():
                    "k": 0.5, "geometry": "smith", "mode": "scanline",
                    "diffuse_reflectance": {"type": "rgb", "value": [0.9, 0.2, 0.1]},
                    "f0": 0.5}, 30))
+    # The other samplers: full-distribution microfacet sampling and cosine sampling.
+    for dist in ("beckmann", "ggx"):
+        cases.append(({"type": "cook_torrance", "distribution": dist, "alpha": 0.3,
+                       "k": 0.3, "sample_visible": False}, 60))
+    cases.append(({"type": "cook_torrance", "distribution": "ggx", "alpha": 0.3,
+                   "k": 0.3, "sampling": "cosine"}, 45))
     return cases
 
 
@@ -122,6 +128,9 @@ CONSISTENCY_CONFIGS += [
      "specular_reflectance": {"type": "rgb", "value": [0.9, 0.9, 2.0]}},
     {"type": "cook_torrance", "distribution": "ggx", "alpha": 0.3, "k": 1.0},   # diffuse only
     {"type": "cook_torrance", "distribution": "ggx", "alpha": 0.0, "k": 0.0},   # alpha clamped
+    {"type": "cook_torrance", "distribution": "beckmann", "alpha": 0.4, "k": 0.2,
+     "sample_visible": False},
+    {"type": "cook_torrance", "distribution": "ggx", "alpha": 0.2, "k": 0.0, "sampling": "cosine"},
 ]
 
 

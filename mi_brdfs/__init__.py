@@ -15,11 +15,12 @@ _llvm.check()
 from . import integrator, plugin   # noqa: E402
 from .cook_torrance import CookTorrance   # noqa: E402
 from .lambert import Lambert              # noqa: E402
+from .ward import Ward                    # noqa: E402
 
-PLUGINS = (Lambert, CookTorrance)
+PLUGINS = (Lambert, CookTorrance, Ward)
 DEFAULT_VARIANT = "llvm_ad_rgb"
 
-__all__ = ["register", "PLUGINS", "DEFAULT_VARIANT", "Lambert", "CookTorrance"]
+__all__ = ["register", "PLUGINS", "DEFAULT_VARIANT", "Lambert", "CookTorrance", "Ward"]
 
 
 def register() -> str:

@@ -1,0 +1,299 @@
+"""
+``ward`` — Ward: Lambert diffuse + anisotropic Gaussian specular
+================================================================
+
+.. list-table::
+   :header-rows: 1
+
+   * - Parameter
+     - Type
+     - Description
+     - Default
+   * - ``diffuse_reflectance``
+     - float, rgb or texture (∂)
+     - m_D, the Lambert colour, >= 0 (above 1 allowed: scanline mode clamps).
+     - 0.5
+   * - ``specular_reflectance``
+     - float, rgb or texture (∂)
+     - m_S, the specular colour, >= 0.
+     - 0.2
+   * - ``alpha``
+     - float or texture >= 0 (∂)
+     - isotropic roughness: sets both alpha_u and alpha_v. Giving it together
+       with ``alpha_u`` or ``alpha_v`` is an error.
+     - 0.1
+   * - ``alpha_u``
+     - float or texture >= 0 (∂)
+     - alpha_t, the roughness along the tangent t: Mitsuba's shading-frame
+       ``s`` axis (local x, i.e. along dp/du), so the highlight follows the
+       surface's UV parametrisation.
+     - 0.1
+   * - ``alpha_v``
+     - float or texture >= 0 (∂)
+     - alpha_b, the roughness along the bitangent b (local y).
+     - 0.1
+   * - ``formula``
+     - string
+     - ``"vectors"``: the lecture's efficient dot-product form; ``"angles"``:
+       its angle form (tan delta, cos phi, sin phi). Equal to float32
+       precision; the choice is pure speed.
+     - ``"vectors"``
+   * - ``mode``
+     - string
+     - ``"hdr"`` or ``"scanline"``.
+     - ``"hdr"``
+
+Roughness values below ``ALPHA_MIN`` = 1e-4 (0 included) are clamped to it,
+as in ``cook_torrance``. As in Mitsuba's ``roughconductor``, ``traverse``
+exposes ``alpha`` when the roughness was given isotropically (or not at all)
+and ``alpha_u`` / ``alpha_v`` when either of those was given (the other then
+keeps its default).
+
+With w_r the viewer (``si.wi``), d the light (``wo``), n, t, b the shading
+frame (z, x, y) and h the half vector of d and w_r, the lecture's specular
+term, in its dot-product form::
+
+    f_s = m_S · exp(-((h·t / a_t)² + (h·b / a_b)²) / (h·n)²)
+              / (4 pi a_t a_b sqrt((w_r·n) / (d·n)))
+
+and in its angle form (delta: angle of h with n, phi: angle of h's projection
+on the tb-plane with t; theta_i of the light, theta_r of the viewer)::
+
+    f_s = m_S · exp(-tan²delta (cos²phi / a_t² + sin²phi / a_b²))
+              / (4 pi a_t a_b sqrt(cos theta_i cos theta_r)) · cos theta_i
+
+(h need not be normalised: the exponent is a ratio.) ``eval`` returns::
+
+    scanline:  clamp01(m_D · clamp(d·n)) + clamp01(f_s)
+    hdr:       m_D / pi · (d·n) + f_s
+
+f_s is already the radiometric Ward BRDF times cos theta_o = d·n,
+m_S exp(...) / (4 pi a_t a_b sqrt((w_r·n)(d·n))) · (d·n), so the hdr mode is the
+same value unclamped; it is reciprocal. Its directional albedo (measured and
+printed by tests/test_ward.py, m_S = 1) is at most 1 up to 89 deg for
+alpha <= 0.5 (0.99 at normal incidence for alpha = 0.05, 0.59 for 0.5) and
+falls roughly as cos(theta_r) for narrow lobes; the 1/sqrt(w_r·n) factor then
+makes it diverge as C/sqrt(cos theta_r) within a fraction of a degree of the
+horizon (above 1 beyond 89.78 deg for alpha = 0.5, 89.9991 deg for 0.05).
+At grazing angles the cosines are kept away from 0 by ``TINY`` (values and
+gradients stay finite); a viewer or light below the surface gets no reflection.
+
+Sampling: cosine hemisphere for the diffuse lobe; for the specular lobe
+Walter's (2005, "Notes on the Ward BRDF") half-vector sampling. With
+psi = 2 pi u_1 and s = sqrt(-log(1 - u_2)) (1 - u_2 > 0: no log of 0),
+
+    h = normalize(a_t s cos psi, a_b s sin psi, 1),
+
+i.e. tan phi_h = (a_b / a_t) tan psi in the quadrant of psi and
+tan²delta = -log(1 - u_2) / (cos²phi_h / a_t² + sin²phi_h / a_b²). Its density
+over half vectors is (phi has density 1 / (2 pi a_t a_b A(phi)), and given phi,
+tan²delta is exponential with rate A(phi) = cos²phi/a_t² + sin²phi/a_b²)::
+
+    p_h(h) = exp(-tan²delta A(phi)) / (pi a_t a_b cos³delta),
+
+and wo = reflect(w_r, h) has p(wo) = p_h(h) / (4 wo·h). The lobe is picked in
+proportion to mean(m_D) vs mean(m_S).
+
+.. code-block:: xml
+
+    <bsdf type="ward">
+        <rgb name="diffuse_reflectance" value="0.1, 0.1, 0.3"/>
+        <rgb name="specular_reflectance" value="0.6, 0.6, 0.6"/>
+        <float name="alpha_u" value="0.3"/>
+        <float name="alpha_v" value="0.05"/>
+    </bsdf>
+"""
+from __future__ import annotations
+
+import drjit as dr
+import mitsuba as mi
+
+from .plugin import BRDF, Reader, is_zero, mean
+
+ALPHA_MIN = 1e-4      # smallest roughness used (0 is clamped here)
+TINY = 1e-18          # keeps cosines away from 0 (TINY² is still a normal float32)
+EXP_CUTOFF = 100.0    # exponents beyond -EXP_CUTOFF give 0 (exp(-100) < 4e-44)
+H_MIN = 1e-12         # smallest h·n (normalised h) at which p_h is evaluated
+
+FORMULAS = ("vectors", "angles")
+
+
+# ----------------------------------------------------------------------------
+#  The formulas (local directions: wi = w_r the viewer, wo = d the light)
+# ----------------------------------------------------------------------------
+
+def _lobe_support(h, alpha_t, alpha_b):
+    """((h·t/a_t)² + (h·b/a_b)², (h·n)², valid) for an unnormalised h.
+
+    ``valid`` marks where exp(-ratio) is not 0 in float32; elsewhere the two
+    terms are benign stand-ins (0 and 1), so that no 0/0 or overflow reaches
+    the gradients through an unselected branch.
+    """
+    num = dr.square(h.x / alpha_t) + dr.square(h.y / alpha_b)
+    hn2 = dr.square(h.z)
+    valid = (h.z > TINY) & (num < EXP_CUTOFF * hn2)
+    return dr.select(valid, num, 0.0), dr.select(valid, hn2, 1.0), valid
+
+
+def _sqrt_cos_ratio(cos_i, cos_o):
+    """sqrt((d·n) / (w_r·n)) = 1 / sqrt((w_r·n) / (d·n)), 0 below the surface."""
+    ok = (cos_i > 0) & (cos_o > 0)
+    ratio = dr.select(ok, cos_o, 1.0) / dr.select(ok, dr.fmax(cos_i, TINY), 1.0)
+    return dr.select(ok, dr.sqrt(ratio), 0.0)
+
+
+def specular_vectors(wi, wo, alpha_t, alpha_b):
+    """The lecture's dot-product form of f_s / m_S (= the eval value, both modes)."""
+    h = wi + wo
+    num, hn2, valid = _lobe_support(h, alpha_t, alpha_b)
+    e = dr.select(valid, dr.exp(-num / hn2), 0.0)
+    norm = 4.0 * dr.pi * alpha_t * alpha_b
+    return e / norm * _sqrt_cos_ratio(mi.Frame3f.cos_theta(wi), mi.Frame3f.cos_theta(wo))
+
+
+def specular_angles(wi, wo, alpha_t, alpha_b):
+    """The lecture's angle form of f_s / m_S: tan delta, cos phi, sin phi."""
+    cos_r, cos_i = mi.Frame3f.cos_theta(wi), mi.Frame3f.cos_theta(wo)
+    h = wi + wo
+    _, _, valid = _lobe_support(h, alpha_t, alpha_b)
+    # delta and phi from h (stand-ins where the lobe is 0, and phi's stand-in
+    # at h = n, where atan2(0, 0) has no derivative and tan delta = 0 anyway)
+    rho2 = dr.square(h.x) + dr.square(h.y)
+    tilted = valid & (rho2 > dr.square(TINY) * dr.square(h.z))
+    hx = dr.select(tilted, h.x, 1.0)
+    hy = dr.select(tilted, h.y, 0.0)
+    hz = dr.select(valid, h.z, 1.0)
+    delta = dr.atan2(dr.sqrt(dr.square(hx) + dr.square(hy)), hz)
+    phi = dr.atan2(hy, hx)
+    tan_delta = dr.tan(delta)
+    sin_phi, cos_phi = dr.sincos(phi)
+    a = dr.square(cos_phi / alpha_t) + dr.square(sin_phi / alpha_b)
+    tan2_a = dr.select(tilted, dr.square(tan_delta) * a, 0.0)
+    e = dr.select(valid, dr.exp(-tan2_a), 0.0)
+    ok = (cos_i > 0) & (cos_r > 0)
+    ci = dr.select(ok, dr.fmax(cos_i, TINY), 1.0)
+    cr = dr.select(ok, dr.fmax(cos_r, TINY), 1.0)
+    f = e / (4.0 * dr.pi * alpha_t * alpha_b * dr.sqrt(ci * cr)) * ci
+    return dr.select(ok, f, 0.0)
+
+
+SPECULAR = {"vectors": specular_vectors, "angles": specular_angles}
+
+
+def diffuse(m_d, cos_o, mode: str):
+    """m_D·clamp(d·n) (scanline) or m_D/pi·cos(theta_o) (hdr)."""
+    scale = 1.0 if mode == "scanline" else dr.inv_pi
+    return m_d * scale * dr.fmax(cos_o, 0.0)
+
+
+# ----------------------------------------------------------------------------
+#  Walter's half-vector sampling
+# ----------------------------------------------------------------------------
+
+def sample_half_vector(sample2, alpha_t, alpha_b):
+    """A half vector h with density p_h (see pdf_half_vector)."""
+    s = dr.sqrt(-dr.log(dr.fmax(1.0 - sample2.y, TINY)))     # tan delta · sqrt(A(phi))
+    sin_psi, cos_psi = dr.sincos(2.0 * dr.pi * sample2.x)
+    h = mi.Vector3f(alpha_t * s * cos_psi, alpha_b * s * sin_psi, 1.0)
+    return dr.normalize(h)
+
+
+def pdf_half_vector(h, alpha_t, alpha_b):
+    """p_h(h) = exp(-tan²delta A(phi)) / (pi a_t a_b cos³delta), h normalised."""
+    num, hn2, valid = _lobe_support(h, alpha_t, alpha_b)
+    valid &= h.z > H_MIN
+    cos3 = dr.select(valid, h.z, 1.0) * hn2
+    p = dr.exp(-num / hn2) / (dr.pi * alpha_t * alpha_b * cos3)
+    return dr.select(valid, p, 0.0)
+
+
+def half_vector(wi, wo):
+    """normalize(wi + wo); the zero vector when wi = -wo."""
+    h = wi + wo
+    return h * dr.rsqrt(dr.fmax(dr.squared_norm(h), dr.square(TINY)))
+
+
+def pdf_specular(wi, wo, alpha_t, alpha_b):
+    """Density of reflect(wi, h), h ~ p_h, at wo: p_h(h) / (4 wo·h)."""
+    h = half_vector(wi, wo)
+    o_h = dr.dot(wo, h)
+    p = pdf_half_vector(h, alpha_t, alpha_b) / (4.0 * dr.fmax(o_h, TINY))
+    return dr.select(o_h > 0, p, 0.0)
+
+
+# ----------------------------------------------------------------------------
+#  The plugin
+# ----------------------------------------------------------------------------
+
+class Ward(BRDF):
+    name = "ward"
+
+    def read(self, reader: Reader) -> None:
+        self.formula = reader.choice("formula", "vectors", FORMULAS)
+        self.m_diffuse = reader.texture("diffuse_reflectance", 0.5)     # m_D
+        self.m_specular = reader.texture("specular_reflectance", 0.2)   # m_S
+        props = reader.props
+        self.anisotropic = "alpha_u" in props or "alpha_v" in props
+        if self.anisotropic:
+            if "alpha" in props:
+                raise reader.error("alpha", props["alpha"],
+                                   "either alpha or alpha_u/alpha_v, not both")
+            self.m_alpha_u = reader.texture("alpha_u", 0.1)            # a_t
+            self.m_alpha_v = reader.texture("alpha_v", 0.1)            # a_b
+        else:
+            self.m_alpha_u = self.m_alpha_v = reader.texture("alpha", 0.1)
+
+    def traverse(self, cb):
+        flags = mi.ParamFlags.Differentiable
+        cb.put("diffuse_reflectance", self.m_diffuse, flags)
+        cb.put("specular_reflectance", self.m_specular, flags)
+        if self.anisotropic:
+            cb.put("alpha_u", self.m_alpha_u, flags)
+            cb.put("alpha_v", self.m_alpha_v, flags)
+        else:
+            cb.put("alpha", self.m_alpha_u, flags)
+
+    # --- lobes ---------------------------------------------------------------
+    def has_diffuse(self) -> bool:
+        return not is_zero(self.m_diffuse)
+
+    def has_specular(self) -> bool:
+        return not is_zero(self.m_specular)
+
+    def alphas(self, si, active):
+        """(a_t, a_b), clamped to ALPHA_MIN."""
+        alpha_t = dr.fmax(self.m_alpha_u.eval_1(si, active), ALPHA_MIN)
+        if not self.anisotropic:
+            return alpha_t, alpha_t
+        return alpha_t, dr.fmax(self.m_alpha_v.eval_1(si, active), ALPHA_MIN)
+
+    def lobes(self, si, wo, active):
+        f_d = mi.Spectrum(0.0)
+        f_s = mi.Spectrum(0.0)
+        if self.diffuse:
+            m_d = self.m_diffuse.eval(si, active)
+            f_d = diffuse(m_d, mi.Frame3f.cos_theta(wo), self.mode)
+        if self.specular:
+            m_s = self.m_specular.eval(si, active)
+            f_s = m_s * SPECULAR[self.formula](si.wi, wo, *self.alphas(si, active))
+        return f_d, f_s
+
+    def selection_weights(self, si, active):
+        return (mean(self.m_diffuse.eval(si, active)),
+                mean(self.m_specular.eval(si, active)))
+
+    # --- specular sampling ----------------------------------------------------
+    def sample_specular(self, si, sample2, active):
+        # Sample h, the half vector, then reflect the viewer about it.
+        h = sample_half_vector(sample2, *self.alphas(si, active))
+        return mi.reflect(si.wi, h)
+
+    def pdf_specular(self, si, wo, active):
+        return pdf_specular(si.wi, wo, *self.alphas(si, active))
+
+    def describe(self) -> dict:
+        alphas = ({"alpha_u": self.m_alpha_u, "alpha_v": self.m_alpha_v}
+                  if self.anisotropic else {"alpha": self.m_alpha_u})
+        return {"formula": self.formula, **alphas,
+                "diffuse_reflectance": self.m_diffuse,
+                "specular_reflectance": self.m_specular}

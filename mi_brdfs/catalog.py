@@ -40,3 +40,28 @@ LOBES: dict[str, dict] = {
 def quick(entries: dict, n: int = 1) -> dict:
     """The first n configurations of each model (for --quick runs)."""
     return {name: configs[:n] for name, configs in entries.items()}
+
+
+# Benchmarks: every model and variant whose cost is compared (name, config).
+BENCH_MODELS: list[tuple[str, dict]] = [
+    ("lambert", {"type": "lambert", "reflectance": 0.6}),
+    *[(f"cook_torrance {d} {g}",
+       {"type": "cook_torrance", "distribution": d, "geometry": g, "alpha": 0.3})
+      for d in ("blinn", "beckmann", "ggx") for g in ("cook_torrance", "smith")],
+    ("ward vectors", {"type": "ward", "alpha_u": 0.1, "alpha_v": 0.3, "formula": "vectors"}),
+    ("ward angles", {"type": "ward", "alpha_u": 0.1, "alpha_v": 0.3, "formula": "angles"}),
+]
+
+# Sampling strategies per glossy lobe: (name, config, [(strategy, options), ...]);
+# the first strategy is the plugin's default.
+BENCH_SAMPLING: list[tuple[str, dict, list[tuple[str, dict]]]] = [
+    *[(f"cook_torrance ggx alpha {a}",
+       {"type": "cook_torrance", "distribution": "ggx", "alpha": a, "k": 0.0, "f0": 0.9},
+       [("visible normals", {}), ("full distribution", {"sample_visible": False}),
+        ("cosine", {"sampling": "cosine"})])
+      for a in (0.05, 0.3)],
+    ("ward anisotropic 0.05 x 0.3",
+     {"type": "ward", "alpha_u": 0.05, "alpha_v": 0.3, "diffuse_reflectance": 0.0,
+      "specular_reflectance": 0.9},
+     [("lobe", {}), ("cosine", {"sampling": "cosine"})]),
+]

@@ -149,6 +149,17 @@ def cmd_validate(args) -> int:
     return 0
 
 
+def cmd_bench(args) -> int:
+    from . import bench
+
+    log = (lambda *a: None) if args.quiet else (lambda msg: print(msg, file=sys.stderr))
+    only = [g.strip() for g in args.only.split(",")] if args.only else None
+    results = bench.run(args.output, quick=args.quick, only=only, cache_dir=args.cache, log=log)
+    print(f"bench: {len(results['groups'])} groups in {results['seconds']:.0f} s -> "
+          f"{os.path.join(args.output, 'README.md')}")
+    return 0
+
+
 def parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="mi-brdfs", description=__doc__.splitlines()[0])
     sub = p.add_subparsers(dest="command", required=True)
@@ -185,6 +196,15 @@ def parser() -> argparse.ArgumentParser:
     v.add_argument("-q", "--quiet", action="store_true")
     v.add_argument("-v", "--verbose", action="store_true", help="show tracebacks on errors")
     v.set_defaults(run=cmd_validate)
+
+    b = sub.add_parser("bench", help="measure the speed/accuracy trade-offs")
+    b.add_argument("-o", "--output", required=True, help="results directory")
+    b.add_argument("--quick", action="store_true", help="tiny scene, few repeats (CI)")
+    b.add_argument("--only", default=None, help="comma-separated groups (default: all)")
+    b.add_argument("--cache", default=None, help="reference cache (default ~/.cache/mi_brdfs)")
+    b.add_argument("-q", "--quiet", action="store_true")
+    b.add_argument("-v", "--verbose", action="store_true", help="show tracebacks on errors")
+    b.set_defaults(run=cmd_bench)
     return p
 
 

@@ -1,0 +1,462 @@
+"""The speed/accuracy benchmark: ``mi-brdfs bench [--quick] [--only GROUP] -o OUT_DIR``.
+
+Every timing is the median of ``repeats`` renders after a warm-up render that
+compiles the kernels (the warm-up's extra time is reported as compile time),
+all in one process so that ratios are meaningful on a noisy machine. Every
+error is the relative MSE (pbrt's form, mean((t - r)²/(r + 0.01)²)) against a
+converged reference rendered once at high spp and cached on disk, keyed by the
+scene and the settings. Efficiency is 1 / (relMSE × seconds).
+
+Groups:
+
+builtin      Python plugin vs Mitsuba's C++ built-in, same scene and spp; the
+             time ratio, and where the time goes (Python tracing, LLVM codegen,
+             kernel execution, from Dr.Jit's kernel history).
+models       render time per spp of every model and variant, relative to lambert.
+oren_nayar   the Oren-Nayar table at several resolutions vs the exact formulas:
+             time and error against the exact render (same seed: no noise).
+sampling     glossy lobes: cosine-hemisphere vs the lobe's importance sampling
+             (and full-distribution vs visible-normal microfacet sampling),
+             error at equal spp and efficiency.
+integrators  scan-line direct lighting, Mitsuba's ``direct``, ``path`` with max
+             depth 2, 3 and 8, against a converged path-traced reference.
+convergence  error vs spp (log-log) and its slope (about -1 for relMSE).
+scaling      render time vs resolution and vs number of lights (scan-line).
+
+Outputs in OUT_DIR: results.json, results.csv, README.md (tables) and plots.
+"""
+from __future__ import annotations
+
+import csv
+import hashlib
+import json
+import math
+import os
+import platform
+import statistics
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+GROUPS = ("builtin", "models", "oren_nayar", "sampling", "integrators", "convergence", "scaling")
+
+
+@dataclass
+class Settings:
+    res: int
+    spp: int
+    repeats: int
+    ref_spp: int
+    spp_ladder: tuple[int, ...]
+    resolutions: tuple[int, ...]
+    light_counts: tuple[int, ...]
+    table_resolutions: tuple[int, ...]
+
+
+QUICK = Settings(res=24, spp=4, repeats=3, ref_spp=64, spp_ladder=(1, 2, 4, 8),
+                 resolutions=(16, 32), light_counts=(1, 2, 4), table_resolutions=(8, 32))
+FULL = Settings(res=192, spp=16, repeats=7, ref_spp=4096, spp_ladder=(1, 2, 4, 8, 16, 32, 64, 128),
+                resolutions=(64, 128, 256, 512), light_counts=(1, 2, 4, 8, 16, 32),
+                table_resolutions=(4, 8, 16, 32, 64, 128, 256))
+
+
+def efficiency(relmse: float, seconds: float) -> float:
+    """1 / (relMSE × time); inf for an exact result."""
+    if relmse <= 0:
+        return math.inf
+    return 1.0 / (relmse * seconds)
+
+
+def relmse(test: np.ndarray, ref: np.ndarray) -> float:
+    return float(np.mean((test - ref) ** 2 / (ref + 0.01) ** 2))
+
+
+# ----------------------------------------------------------------------------
+#  Scenes
+# ----------------------------------------------------------------------------
+
+def scene_dict(bsdf: dict, res: int, integrator: dict | None = None, lights: int = 1,
+               env: float = 0.3, plane: bool = True) -> dict:
+    """A sphere on a plane, point lights and a dim constant environment."""
+    import mitsuba as mi
+    T = mi.ScalarTransform4f
+    d = {
+        "type": "scene",
+        "integrator": integrator or {"type": "path", "max_depth": 3},
+        "sensor": {"type": "perspective", "fov": 36,
+                   "to_world": T().look_at(origin=[0, 1.2, 4], target=[0, 0, 0], up=[0, 1, 0]),
+                   "film": {"type": "hdrfilm", "width": res, "height": res,
+                            "rfilter": {"type": "box"}},
+                   "sampler": {"type": "independent"}},
+        "sphere": {"type": "sphere", "bsdf": bsdf},
+        "env": {"type": "constant", "radiance": {"type": "rgb", "value": env}},
+    }
+    if plane:
+        d["plane"] = {"type": "rectangle", "bsdf": {"type": "lambert", "reflectance": 0.5},
+                      "to_world": T().translate([0, -1, 0]) @ T().rotate([1, 0, 0], -90)
+                      @ T().scale(4)}
+    for i in range(lights):
+        angle = 2 * math.pi * i / max(lights, 1)
+        d[f"light{i}"] = {"type": "point",
+                          "position": [3 * math.cos(angle), 3.0, 3 * math.sin(angle) + 1.5],
+                          "intensity": {"type": "rgb", "value": 12.0 / lights}}
+    return d
+
+
+# ----------------------------------------------------------------------------
+#  Measuring
+# ----------------------------------------------------------------------------
+
+def _render(scene, spp: int, seed: int) -> np.ndarray:
+    import drjit as dr
+    import mitsuba as mi
+    image = mi.render(scene, spp=spp, seed=seed)
+    dr.eval(image)
+    dr.sync_thread()
+    return image
+
+
+def timed(scene, spp: int, repeats: int) -> dict:
+    """Warm-up render (compiles), then the median of `repeats` renders, with the
+    kernel history's split of the last one: tracing, codegen, execution (s)."""
+    import drjit as dr
+
+    start = time.perf_counter()
+    _render(scene, spp, seed=0)
+    first = time.perf_counter() - start
+    times = []
+    for r in range(repeats):
+        start = time.perf_counter()
+        _render(scene, spp, seed=r + 1)
+        times.append(time.perf_counter() - start)
+    median = statistics.median(times)
+    # Where the time goes, on one more (warm) render.
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    dr.kernel_history()                              # clear
+    start = time.perf_counter()
+    _render(scene, spp, seed=repeats + 1)
+    wall = time.perf_counter() - start
+    history = dr.kernel_history()
+    dr.set_flag(dr.JitFlag.KernelHistory, False)
+    execution = sum(k.get("execution_time", 0.0) for k in history) / 1000
+    codegen = sum(k.get("codegen_time", 0.0) + k.get("backend_time", 0.0) for k in history) / 1000
+    return {"median_s": median, "compile_s": max(first - median, 0.0), "times_s": times,
+            "kernels": len(history), "execution_s": execution, "codegen_s": codegen,
+            "tracing_s": max(wall - execution - codegen, 0.0)}
+
+
+class References:
+    """Converged references, rendered once and cached on disk."""
+
+    def __init__(self, directory: str, spp: int):
+        self.directory, self.spp = directory, spp
+        os.makedirs(directory, exist_ok=True)
+
+    def key(self, d: dict) -> str:
+        import mitsuba as mi
+        text = json.dumps(d, sort_keys=True, default=str) + f"|{self.spp}|{mi.__version__}"
+        return hashlib.sha1(text.encode()).hexdigest()[:16]
+
+    def get(self, d: dict) -> np.ndarray:
+        import mitsuba as mi
+
+        from . import exr
+        path = os.path.join(self.directory, f"ref-{self.key(d)}.exr")
+        if os.path.exists(path):
+            return exr.read_exr(path).astype(np.float64)
+        scene = mi.load_dict(d)
+        passes = max(1, self.spp // 256)
+        image = sum(np.array(_render(scene, self.spp // passes, seed=10_000 + i))[..., :3]
+                    for i in range(passes)) / passes
+        exr.write_exr(path, image)
+        return np.asarray(image, dtype=np.float64)
+
+
+# ----------------------------------------------------------------------------
+#  The groups
+# ----------------------------------------------------------------------------
+
+BUILTIN_PAIRS = [
+    ("lambert vs diffuse", {"type": "lambert", "reflectance": 0.6},
+     {"type": "diffuse", "reflectance": 0.6}),
+    ("cook_torrance (ggx, smith, f0=1, k=0) vs roughconductor",
+     {"type": "cook_torrance", "distribution": "ggx", "geometry": "smith", "f0": 1.0, "k": 0.0,
+      "alpha": 0.3},
+     {"type": "roughconductor", "distribution": "ggx", "alpha": 0.3}),
+]
+
+
+def group_builtin(s: Settings, refs) -> list[dict]:
+    import mitsuba as mi
+    rows = []
+    for name, ours, builtin in BUILTIN_PAIRS:
+        t_ours = timed(mi.load_dict(scene_dict(ours, s.res)), s.spp, s.repeats)
+        t_builtin = timed(mi.load_dict(scene_dict(builtin, s.res)), s.spp, s.repeats)
+        rows.append({"name": name, "plugin_s": t_ours["median_s"],
+                     "builtin_s": t_builtin["median_s"],
+                     "ratio": t_ours["median_s"] / t_builtin["median_s"],
+                     "plugin_compile_s": t_ours["compile_s"],
+                     "builtin_compile_s": t_builtin["compile_s"],
+                     "plugin_tracing_s": t_ours["tracing_s"],
+                     "builtin_tracing_s": t_builtin["tracing_s"],
+                     "plugin_execution_s": t_ours["execution_s"],
+                     "builtin_execution_s": t_builtin["execution_s"],
+                     "plugin_codegen_s": t_ours["codegen_s"],
+                     "builtin_codegen_s": t_builtin["codegen_s"]})
+    return rows
+
+
+def group_models(s: Settings, refs) -> list[dict]:
+    import mitsuba as mi
+
+    from . import catalog
+    rows = []
+    for name, config in catalog.BENCH_MODELS:
+        t = timed(mi.load_dict(scene_dict(config, s.res)), s.spp, s.repeats)
+        rows.append({"name": name, "median_s": t["median_s"], "per_spp_s": t["median_s"] / s.spp,
+                     "compile_s": t["compile_s"]})
+    base = next(r["median_s"] for r in rows if r["name"] == "lambert")
+    for r in rows:
+        r["relative_to_lambert"] = r["median_s"] / base
+    return rows
+
+
+def group_oren_nayar(s: Settings, refs) -> list[dict]:
+    import mitsuba as mi
+    base = {"type": "oren_nayar", "sigma": 0.5, "reflectance": 0.8}
+    exact_scene = mi.load_dict(scene_dict({**base, "method": "exact"}, s.res))
+    exact = timed(exact_scene, s.spp, s.repeats)
+    exact_img = np.array(_render(exact_scene, s.spp, seed=99))[..., :3]
+    again = np.array(_render(exact_scene, s.spp, seed=99))[..., :3]     # same seed: no noise
+    rows = [{"name": "exact", "table_resolution": 0, "median_s": exact["median_s"],
+             "speedup": 1.0, "relmse_vs_exact": relmse(again, exact_img),
+             "max_abs_vs_exact": float(np.max(np.abs(again - exact_img)))}]
+    for n in s.table_resolutions:
+        scene = mi.load_dict(scene_dict({**base, "method": "table", "table_resolution": n}, s.res))
+        t = timed(scene, s.spp, s.repeats)
+        img = np.array(_render(scene, s.spp, seed=99))[..., :3]
+        rows.append({"name": f"table {n}", "table_resolution": n, "median_s": t["median_s"],
+                     "speedup": exact["median_s"] / t["median_s"],
+                     "relmse_vs_exact": relmse(img, exact_img),
+                     "max_abs_vs_exact": float(np.max(np.abs(img - exact_img)))})
+    return rows
+
+
+def group_sampling(s: Settings, refs) -> list[dict]:
+    import mitsuba as mi
+
+    from . import catalog
+    rows = []
+    for name, config, strategies in catalog.BENCH_SAMPLING:
+        reference = refs.get(scene_dict({**config, **strategies[0][1]}, s.res))
+        for label, options in strategies:
+            d = scene_dict({**config, **options}, s.res)
+            scene = mi.load_dict(d)
+            t = timed(scene, s.spp, s.repeats)
+            img = np.array(_render(scene, s.spp, seed=7))[..., :3]
+            err = relmse(img, reference)
+            rows.append({"name": name, "strategy": label, "spp": s.spp,
+                         "median_s": t["median_s"], "relmse": err,
+                         "efficiency": efficiency(err, t["median_s"])})
+        best = rows[-len(strategies)]["efficiency"]
+        for r in rows[-len(strategies):]:
+            r["efficiency_vs_first"] = r["efficiency"] / best if best else float("nan")
+    return rows
+
+
+INTEGRATORS = [
+    ("scanline", {"type": "scanline", "clamp": False, "shadows": True}),
+    ("direct", {"type": "direct"}),
+    ("path depth 2", {"type": "path", "max_depth": 2}),
+    ("path depth 3", {"type": "path", "max_depth": 3}),
+    ("path depth 8", {"type": "path", "max_depth": 8}),
+]
+
+
+def group_integrators(s: Settings, refs) -> list[dict]:
+    import mitsuba as mi
+    bsdf = {"type": "cook_torrance", "distribution": "ggx", "alpha": 0.3, "k": 0.5}
+    reference = refs.get(scene_dict(bsdf, s.res, {"type": "path", "max_depth": 16}))
+    rows = []
+    for name, integrator in INTEGRATORS:
+        scene = mi.load_dict(scene_dict(bsdf, s.res, integrator))
+        t = timed(scene, s.spp, s.repeats)
+        img = np.array(_render(scene, s.spp, seed=5))[..., :3]
+        err = relmse(img, reference)
+        rows.append({"name": name, "median_s": t["median_s"], "relmse": err,
+                     "efficiency": efficiency(err, t["median_s"])})
+    return rows
+
+
+def group_convergence(s: Settings, refs) -> list[dict]:
+    import mitsuba as mi
+    d = scene_dict({"type": "cook_torrance", "distribution": "ggx", "alpha": 0.3, "k": 0.5}, s.res)
+    reference = refs.get(d)
+    scene = mi.load_dict(d)
+    rows = []
+    for spp in s.spp_ladder:
+        errors = [relmse(np.array(_render(scene, spp, seed=100 + i))[..., :3], reference)
+                  for i in range(3)]
+        rows.append({"spp": spp, "relmse": float(np.mean(errors))})
+    x = np.log([r["spp"] for r in rows])
+    y = np.log([r["relmse"] for r in rows])
+    slope = float(np.polyfit(x, y, 1)[0])
+    for r in rows:
+        r["slope"] = slope
+    return rows
+
+
+def group_scaling(s: Settings, refs) -> list[dict]:
+    import mitsuba as mi
+    bsdf = {"type": "lambert", "mode": "scanline"}
+    rows = []
+    for res in s.resolutions:
+        t = timed(mi.load_dict(scene_dict(bsdf, res, {"type": "scanline"})), s.spp, s.repeats)
+        rows.append({"axis": "resolution", "value": res, "median_s": t["median_s"]})
+    for n in s.light_counts:
+        t = timed(mi.load_dict(scene_dict(bsdf, s.res, {"type": "scanline"}, lights=n)),
+                  s.spp, s.repeats)
+        rows.append({"axis": "lights", "value": n, "median_s": t["median_s"]})
+    return rows
+
+
+RUNNERS = {"builtin": group_builtin, "models": group_models, "oren_nayar": group_oren_nayar,
+           "sampling": group_sampling, "integrators": group_integrators,
+           "convergence": group_convergence, "scaling": group_scaling}
+
+
+# ----------------------------------------------------------------------------
+#  Outputs
+# ----------------------------------------------------------------------------
+
+def machine() -> dict:
+    import drjit as dr
+    import mitsuba as mi
+    cpu = platform.processor()
+    try:
+        with open("/proc/cpuinfo") as f:
+            cpu = next(line.split(":", 1)[1].strip() for line in f if line.startswith("model name"))
+    except (OSError, StopIteration):
+        pass
+    return {"cpu": cpu, "cores": os.cpu_count(), "variant": mi.variant(),
+            "mitsuba": mi.__version__, "drjit": dr.__version__,
+            "llvm": ".".join(map(str, dr.detail.llvm_version())),
+            "python": platform.python_version()}
+
+
+def _fmt(v) -> str:
+    if isinstance(v, float):
+        return f"{v:.4g}"
+    return str(v)
+
+
+def write_outputs(out_dir: str, results: dict) -> None:
+    from .exr import write_atomically
+    os.makedirs(out_dir, exist_ok=True)
+    write_atomically(os.path.join(out_dir, "results.json"),
+                     lambda p: open(p, "w").write(json.dumps(results, indent=1)))
+
+    def write_csv(path):
+        with open(path, "w", newline="") as f:
+            w = csv.writer(f)
+            w.writerow(["group", "row", "key", "value"])
+            for group, rows in results["groups"].items():
+                for i, row in enumerate(rows):
+                    for k, v in row.items():
+                        if not isinstance(v, list):
+                            w.writerow([group, i, k, v])
+    write_atomically(os.path.join(out_dir, "results.csv"), write_csv)
+
+    lines = ["# mi-brdfs bench results", "",
+             f"{results['settings_name']} run, {results['seconds']:.0f} s. Machine: "
+             + ", ".join(f"{k} {v}" for k, v in results["machine"].items()) + ".", "",
+             "Timings are medians of repeated renders after a warm-up (compile) render, "
+             "in one process; errors are relative MSE against a converged reference.", ""]
+    for group, rows in results["groups"].items():
+        if not rows:
+            continue
+        keys = [k for k in rows[0] if not isinstance(rows[0][k], list)]
+        lines += [f"## {group}", "", "| " + " | ".join(keys) + " |",
+                  "|" + "---|" * len(keys)]
+        lines += ["| " + " | ".join(_fmt(r[k]) for k in keys) + " |" for r in rows]
+        lines += ["", *(f"![{p}]({p})" for p in results["plots"].get(group, [])), ""]
+    write_atomically(os.path.join(out_dir, "README.md"),
+                     lambda p: open(p, "w").write("\n".join(lines)))
+
+
+def plots(out_dir: str, results: dict) -> dict[str, list[str]]:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    made: dict[str, list[str]] = {}
+    g = results["groups"]
+
+    def save(fig, group, name):
+        fig.tight_layout()
+        fig.savefig(os.path.join(out_dir, name), dpi=90)
+        plt.close(fig)
+        made.setdefault(group, []).append(name)
+
+    if g.get("convergence"):
+        rows = g["convergence"]
+        fig, ax = plt.subplots(figsize=(4.5, 3.2))
+        ax.loglog([r["spp"] for r in rows], [r["relmse"] for r in rows], "o-")
+        ax.set_xlabel("spp")
+        ax.set_ylabel("relMSE")
+        ax.set_title(f"convergence, slope {rows[0]['slope']:.2f}")
+        save(fig, "convergence", "convergence.png")
+    if g.get("scaling"):
+        fig, axes = plt.subplots(1, 2, figsize=(8, 3.2))
+        for ax, axis in zip(axes, ("resolution", "lights")):
+            rows = [r for r in g["scaling"] if r["axis"] == axis]
+            ax.plot([r["value"] for r in rows], [r["median_s"] for r in rows], "o-")
+            ax.set_xlabel(axis)
+            ax.set_ylabel("seconds")
+        save(fig, "scaling", "scaling.png")
+    if g.get("oren_nayar"):
+        rows = [r for r in g["oren_nayar"] if r["table_resolution"]]
+        fig, ax = plt.subplots(figsize=(4.5, 3.2))
+        ax.loglog([r["median_s"] for r in rows], [max(r["relmse_vs_exact"], 1e-12) for r in rows], "o-")
+        for r in rows:
+            ax.annotate(str(r["table_resolution"]), (r["median_s"], max(r["relmse_vs_exact"], 1e-12)))
+        ax.axvline(g["oren_nayar"][0]["median_s"], color="k", lw=0.6, label="exact")
+        ax.set_xlabel("seconds")
+        ax.set_ylabel("relMSE vs exact")
+        ax.legend()
+        save(fig, "oren_nayar", "oren_nayar.png")
+    if g.get("integrators"):
+        rows = g["integrators"]
+        fig, ax = plt.subplots(figsize=(4.5, 3.2))
+        for r in rows:
+            ax.loglog(r["median_s"], r["relmse"], "o")
+            ax.annotate(r["name"], (r["median_s"], r["relmse"]), fontsize=7)
+        ax.set_xlabel("seconds")
+        ax.set_ylabel("relMSE vs converged path tracing")
+        save(fig, "integrators", "integrators.png")
+    return made
+
+
+def run(out_dir: str, quick: bool = False, only: list[str] | None = None,
+        cache_dir: str | None = None, log=print) -> dict:
+    import mi_brdfs  # noqa: F401  (plugins registered)
+
+    settings = QUICK if quick else FULL
+    groups = only or list(GROUPS)
+    for g in groups:
+        if g not in RUNNERS:
+            raise ValueError(f"unknown bench group {g!r}; valid: {', '.join(GROUPS)}")
+    cache = cache_dir or os.path.join(os.path.expanduser("~"), ".cache", "mi_brdfs", "references")
+    refs = References(cache, settings.ref_spp)
+    start = time.perf_counter()
+    results = {"settings_name": "quick" if quick else "full", "settings": settings.__dict__,
+               "machine": machine(), "groups": {}}
+    for g in groups:
+        log(f"bench: {g} ...")
+        results["groups"][g] = RUNNERS[g](settings, refs)
+    results["seconds"] = time.perf_counter() - start
+    os.makedirs(out_dir, exist_ok=True)
+    results["plots"] = plots(out_dir, results)
+    write_outputs(out_dir, results)
+    return results

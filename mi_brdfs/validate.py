@@ -36,7 +36,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import catalog, compare
+from . import analysis, catalog, compare
 
 MODES = ("hdr", "scanline")
 ALPHA = 0.01                      # significance level of every statistical test
@@ -169,28 +169,6 @@ def equivalence_section(size: Size, out: str) -> list[dict]:
 #  2. White furnace
 # ----------------------------------------------------------------------------
 
-def quadrature_albedo(bsdf, angles, strata: tuple[int, int], seed: int = 7) -> np.ndarray:
-    """E(theta_i) per angle (channel max), stratified jittered uniform-hemisphere quadrature."""
-    import drjit as dr
-    import mitsuba as mi
-
-    nu, nv = strata
-    rng = np.random.default_rng(seed)
-    u = ((np.arange(nu)[:, None] + rng.random((nu, nv))) / nu).ravel()
-    v = ((np.arange(nv)[None, :] + rng.random((nu, nv))) / nv).ravel()
-    s = np.sqrt(np.maximum(0.0, 1.0 - u * u))
-    wo = mi.Vector3f(s * np.cos(2 * np.pi * v), s * np.sin(2 * np.pi * v), u)
-    out = []
-    for theta in angles:
-        t = math.radians(theta)
-        si = dr.zeros(mi.SurfaceInteraction3f)
-        si.wi = mi.Vector3f(dr.opaque(mi.Float, math.sin(t)), 0.0, dr.opaque(mi.Float, math.cos(t)))
-        value = bsdf.eval(mi.BSDFContext(), si, wo)
-        e = [float(dr.sum(mi.Float64(value[c]))[0]) * 2 * np.pi / (nu * nv) for c in range(3)]
-        out.append(max(e))
-    return np.array(out)
-
-
 def rendered_albedo(config: dict, angles, size: Size) -> np.ndarray:
     """E(theta_i) by rendering: a large plane with the BSDF inside a uniform white
     environment, seen by an orthographic camera at theta_i (every pixel sees
@@ -229,7 +207,7 @@ def furnace_section(size: Size, out: str, models: dict) -> list[dict]:
             fig, ax = plt.subplots(figsize=(5, 3.4), dpi=90)
             for mode, colour in zip(MODES, ("C0", "C3")):
                 config = {**base, "mode": mode}
-                quad = quadrature_albedo(mi.load_dict(config), size.angles, size.quad)
+                quad = analysis.directional_albedo(mi.load_dict(config), size.angles, size.quad)
                 rend = rendered_albedo(config, size.angles, size)
                 ax.plot(size.angles, quad, "-o", color=colour, ms=3, label=f"{mode}: quadrature")
                 ax.plot(size.angles, rend, "x", color=colour, label=f"{mode}: render")
@@ -297,29 +275,17 @@ def sampling_section(size: Size, models: dict) -> list[dict]:
 # ----------------------------------------------------------------------------
 
 def lobe_section(out: str, models: dict, angles=(0, 30, 60, 80)) -> list[dict]:
-    import drjit as dr
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     import mitsuba as mi
 
-    theta_o = np.radians(np.linspace(-89.5, 89.5, 359))      # signed, in the plane of incidence
-    wo = mi.Vector3f(np.sin(theta_o), 0.0, np.cos(theta_o))
     rows = []
     for name, base in models.items():
         fig, axes = plt.subplots(1, 2, subplot_kw={"projection": "polar"}, figsize=(8, 3.6), dpi=90)
         for ax, mode in zip(axes, MODES):
-            bsdf = mi.load_dict({**base, "mode": mode})
-            for a in angles:
-                t = math.radians(a)
-                si = dr.zeros(mi.SurfaceInteraction3f)
-                si.wi = mi.Vector3f(-math.sin(t), 0.0, math.cos(t))     # viewer on the left
-                value = np.array(bsdf.eval(mi.BSDFContext(), si, wo)).mean(axis=0)
-                ax.plot(theta_o, value, label=f"θ_i = {a}°")
-            ax.set_theta_zero_location("N")
-            ax.set_thetamin(-90)
-            ax.set_thetamax(90)
-            ax.set_title(f"{name} ({mode})", fontsize=9)
+            analysis.polar_lobes(ax, mi.load_dict({**base, "mode": mode}), angles,
+                                 f"{name} ({mode})")
         axes[1].legend(fontsize=7, loc="lower right", bbox_to_anchor=(1.35, 0.0))
         fig.tight_layout()
         file = f"lobe_{name}.png"

@@ -1,0 +1,80 @@
+"""Looking at a BSDF: its values in the plane of incidence, over the hemisphere,
+and its directional albedo. Used by the validation report and the notebooks."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+def _si(theta_i_deg: float, phi_i_deg: float = 180.0):
+    """A surface interaction whose viewer is at theta_i (opaque: one kernel for all angles)."""
+    import drjit as dr
+    import mitsuba as mi
+    t, p = math.radians(theta_i_deg), math.radians(phi_i_deg)
+    si = dr.zeros(mi.SurfaceInteraction3f)
+    si.wi = mi.Vector3f(dr.opaque(mi.Float, math.sin(t) * math.cos(p)),
+                        dr.opaque(mi.Float, math.sin(t) * math.sin(p)),
+                        dr.opaque(mi.Float, math.cos(t)))
+    si.uv = mi.Point2f(0.5, 0.5)
+    return si
+
+
+def evaluate(bsdf, theta_i_deg: float, wo: np.ndarray, phi_i_deg: float = 180.0) -> np.ndarray:
+    """eval(wi, wo) (f·cos theta_o, per channel) for the viewer at theta_i and an (N, 3) array wo."""
+    import mitsuba as mi
+    value = bsdf.eval(mi.BSDFContext(), _si(theta_i_deg, phi_i_deg),
+                      mi.Vector3f(wo[:, 0], wo[:, 1], wo[:, 2]))
+    return np.array(value).T
+
+
+def plane_of_incidence(bsdf, theta_i_deg: float, n: int = 359):
+    """(theta_o in radians, signed: > 0 on the mirror side; eval channel mean)
+    for directions wo in the plane of incidence. The viewer is at -theta_i."""
+    theta_o = np.radians(np.linspace(-89.5, 89.5, n))
+    wo = np.stack([np.sin(theta_o), np.zeros(n), np.cos(theta_o)], axis=1)
+    return theta_o, evaluate(bsdf, theta_i_deg, wo).mean(axis=1)
+
+
+def hemisphere(bsdf, theta_i_deg: float, n: int = 96):
+    """eval channel mean on an (n, 4n) grid of (theta_o, phi_o): for 3-D lobe plots.
+    Returns theta, phi (radians, 2-D grids) and the values."""
+    theta = np.linspace(0, math.pi / 2, n)
+    phi = np.linspace(0, 2 * math.pi, 4 * n)
+    t, p = np.meshgrid(theta, phi, indexing="ij")
+    wo = np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)], axis=-1).reshape(-1, 3)
+    return t, p, evaluate(bsdf, theta_i_deg, wo).mean(axis=1).reshape(t.shape)
+
+
+def directional_albedo(bsdf, angles, strata: tuple[int, int] = (512, 2048), seed: int = 7,
+                       channel=max) -> np.ndarray:
+    """E(theta_i) = integral of eval(wi, wo) dwo for each angle (degrees), by
+    stratified jittered uniform-hemisphere quadrature: independent of the
+    plugin's own sampling. ``channel`` reduces the three channels (max by default)."""
+    import drjit as dr
+    import mitsuba as mi
+
+    nu, nv = strata
+    rng = np.random.default_rng(seed)
+    u = ((np.arange(nu)[:, None] + rng.random((nu, nv))) / nu).ravel()
+    v = ((np.arange(nv)[None, :] + rng.random((nu, nv))) / nv).ravel()
+    s = np.sqrt(np.maximum(0.0, 1.0 - u * u))
+    wo = mi.Vector3f(s * np.cos(2 * np.pi * v), s * np.sin(2 * np.pi * v), u)
+    out = []
+    for theta in angles:
+        value = bsdf.eval(mi.BSDFContext(), _si(theta, 0.0), wo)
+        e = [float(dr.sum(mi.Float64(value[c]))[0]) * 2 * np.pi / (nu * nv) for c in range(3)]
+        out.append(channel(e))
+    return np.array(out)
+
+
+def polar_lobes(ax, bsdf, angles=(0, 30, 60, 80), title: str = "") -> None:
+    """Draw eval in the plane of incidence on a matplotlib polar axis, one curve per angle."""
+    for a in angles:
+        theta_o, value = plane_of_incidence(bsdf, a)
+        ax.plot(theta_o, value, label=f"θ_i = {a}°")
+    ax.set_theta_zero_location("N")
+    ax.set_thetamin(-90)
+    ax.set_thetamax(90)
+    if title:
+        ax.set_title(title, fontsize=9)

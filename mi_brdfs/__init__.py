@@ -15,12 +15,15 @@ _llvm.check()
 from . import integrator, plugin   # noqa: E402
 from .cook_torrance import CookTorrance   # noqa: E402
 from .lambert import Lambert              # noqa: E402
+from .oren_nayar import OrenNayar         # noqa: E402
+from .toon import Toon                    # noqa: E402
 from .ward import Ward                    # noqa: E402
 
-PLUGINS = (Lambert, CookTorrance, Ward)
+PLUGINS = (Lambert, OrenNayar, Toon, CookTorrance, Ward)
 DEFAULT_VARIANT = "llvm_ad_rgb"
 
-__all__ = ["register", "PLUGINS", "DEFAULT_VARIANT", "Lambert", "CookTorrance", "Ward"]
+__all__ = ["register", "PLUGINS", "DEFAULT_VARIANT", "Lambert", "OrenNayar", "Toon",
+           "CookTorrance", "Ward"]
 
 
 def register() -> str:

@@ -22,6 +22,11 @@
      - bool
      - do not show emitters seen directly by the camera.
      - false
+   * - ``max_depth``
+     - int
+     - accepted and ignored (scan-line lighting is direct), so a scene's
+       ``<integrator type="$mode">`` can set the hdr path tracer's depth.
+     - —
 
 At the first surface the camera sees, the sum over **every** light of the
 scene (not one picked at random)::
@@ -61,6 +66,9 @@ class Scanline:
         self.shadows = bool(props.get("shadows", False))
         self.clamp = bool(props.get("clamp", True))
         self.hide_emitters = bool(props.get("hide_emitters", False))
+        # Accepted and ignored, so one <integrator type="$mode"> element can give
+        # the hdr path tracer a max_depth: scan-line lighting is direct only.
+        props.get("max_depth", -1)
 
     def sample(self, scene, sampler, ray, medium=None, active=True):
         ray = mi.Ray3f(ray)

@@ -5,7 +5,7 @@
   that name the plugin, the parameter, the value and the valid range;
 - the ``mode`` switch: ``"scanline"`` clamps each lobe per colour channel to
   [0, 1] (the lecture's scan-line BRDFs), ``"hdr"`` keeps them unclamped;
-- the lobes: a diffuse lobe (cosine-hemisphere sampling) and/or a glossy lobe
+- the lobes: a diffuse lobe (cosine- or uniform-hemisphere sampling) and/or a glossy lobe
   (the model's own sampler), declared in ``m_flags`` only when present, picked
   in proportion to an estimate of their weight, with the mixture pdf;
 - binding the plain-Python plugin classes onto the active variant's ``mi.BSDF``
@@ -158,6 +158,23 @@ class BRDF:
     def has_specular(self) -> bool:
         return False
 
+    def diffuse_sampling(self) -> str:
+        """How the diffuse lobe is sampled: "cosine" (for lobes carrying a
+        cos theta_o, the Lambert-like ones) or "uniform" (for a lobe that is
+        constant over the hemisphere, like toon's, where cosine sampling would
+        give weights 1/cos theta_o of infinite variance)."""
+        return "cosine"
+
+    def sample_diffuse(self, sample2):
+        if self.diffuse_sampling() == "uniform":
+            return mi.warp.square_to_uniform_hemisphere(sample2)
+        return mi.warp.square_to_cosine_hemisphere(sample2)
+
+    def pdf_diffuse(self, wo):
+        if self.diffuse_sampling() == "uniform":
+            return mi.warp.square_to_uniform_hemisphere_pdf(wo)
+        return mi.warp.square_to_cosine_hemisphere_pdf(wo)
+
     def lit_from_behind(self) -> bool:
         """True if eval() must see lights below the surface (cos_o <= 0), e.g.
         the toon model's dark side; lobes() then zeroes what must be zero."""
@@ -229,11 +246,11 @@ class BRDF:
         elif use_d and use_s:
             wo = dr.select(pick_s,
                            self.sample_specular(si, sample2, active & pick_s),
-                           mi.warp.square_to_cosine_hemisphere(sample2))
+                           self.sample_diffuse(sample2))
         elif use_s:
             wo = self.sample_specular(si, sample2, active)
         else:
-            wo = mi.warp.square_to_cosine_hemisphere(sample2)
+            wo = self.sample_diffuse(sample2)
 
         value, pdf = self.eval_pdf(ctx, si, wo, active)
         active &= (pdf > 0) & (mi.Frame3f.cos_theta(wo) > 0)
@@ -277,7 +294,7 @@ class BRDF:
         p_s = self.specular_probability(si, use_d, use_s, active)
         pdf = mi.Float(0.0)
         if use_d:
-            pdf += (1.0 - p_s) * mi.warp.square_to_cosine_hemisphere_pdf(wo)
+            pdf += (1.0 - p_s) * self.pdf_diffuse(wo)
         if use_s:
             pdf += p_s * self.pdf_specular(si, wo, active)
         return dr.select(active, pdf, 0.0)

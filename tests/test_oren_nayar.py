@@ -1,0 +1,500 @@
+"""oren_nayar: the lecture's formulas (NumPy), Lambert at σ = 0, the white
+furnace, reciprocity, the table against the exact formulas, sampling, extremes,
+errors and differentiability."""
+import functools
+import itertools
+import math
+import re
+
+import numpy as np
+import pytest
+
+import drjit as dr
+import mitsuba as mi
+
+from conftest import evaluate, random_hemisphere, surface, vec
+from mi_brdfs.oren_nayar import OrenNayar
+from mi_brdfs.plugin import register_plugin
+
+register_plugin(OrenNayar)          # not yet in mi_brdfs.PLUGINS
+
+HALF_PI = 0.5 * math.pi
+METHODS = ["exact", "table"]
+
+
+def rgb(c):
+    return {"type": "rgb", "value": list(map(float, c))}
+
+
+def load(**kw):
+    return mi.load_dict({"type": "oren_nayar", **kw})
+
+
+def f32(a):
+    """Directions as the plugin sees them (float32), back in float64."""
+    return np.asarray(a, dtype=np.float32).astype(np.float64)
+
+
+# ----------------------------------------------------------------------------
+#  An independent NumPy transcription of the lecture (d light, w viewer, n = z)
+# ----------------------------------------------------------------------------
+
+def lecture_oren_nayar(d, w, m_d, sigma):
+    """L (A + B G sin α tan β), L = m_D clamp(d·n), per the lecture (float64).
+    sigma: scalar or per-direction array."""
+    sigma = np.asarray(sigma, dtype=np.float64)[..., None] if np.ndim(sigma) else sigma
+    theta_i = np.arccos(np.clip(d[:, 2], -1, 1))
+    theta_r = np.arccos(np.clip(w[:, 2], -1, 1))
+    alpha = np.maximum(theta_i, theta_r)
+    beta = np.minimum(theta_i, theta_r)
+    A = 1 - 0.5 * sigma**2 / (sigma**2 + 0.33)
+    B = 0.45 * sigma**2 / (sigma**2 + 0.09)
+    n = np.array([0.0, 0.0, 1.0])
+    v_i = d - np.sum(d * n, axis=1, keepdims=True) * n
+    v_r = w - np.sum(w * n, axis=1, keepdims=True) * n
+    len_i = np.linalg.norm(v_i, axis=1, keepdims=True)
+    len_r = np.linalg.norm(v_r, axis=1, keepdims=True)
+    v_i /= np.where(len_i > 0, len_i, 1)      # a direction along n: no azimuth, and
+    v_r /= np.where(len_r > 0, len_r, 1)      # then beta = 0, so G does not matter
+    G = np.maximum(0, np.sum(v_i * v_r, axis=1))
+    L = m_d[None, :] * np.clip(d[:, 2:3], 0, 1)
+    return L * (A + B * (G * np.sin(alpha) * np.tan(beta))[:, None])
+
+
+def scanline_reference(d, w, m_d, sigma):
+    return np.clip(lecture_oren_nayar(d, w, m_d, sigma), 0, 1)
+
+
+def hdr_reference(d, w, m_d, sigma):
+    """The issue's hdr eval: m_D/π (A + B G sin α tan β) cos θ_o."""
+    return lecture_oren_nayar(d, w, m_d, sigma) / np.pi
+
+
+SIGMAS = [0.0, 0.25, 0.9, HALF_PI]
+
+
+@pytest.mark.parametrize("sigma", SIGMAS)
+def test_scanline_matches_lecture(rng, sigma):
+    n = 4096
+    d, w = f32(random_hemisphere(rng, n, 0.01)), f32(random_hemisphere(rng, n, 0.01))
+    m_d = np.array([2.6, 1.1, 0.3])          # above 1: the clamp is exercised
+    bsdf = load(mode="scanline", sigma=sigma, reflectance=rgb(m_d))
+    v, _ = evaluate(bsdf, wi=w, wo=d)
+    raw = lecture_oren_nayar(d, w, m_d, sigma)
+    np.testing.assert_allclose(v, np.clip(raw, 0, 1), rtol=2e-4, atol=1e-6)
+    assert (raw[:, 0] > 1).any() and ((raw[:, 0] > 0.05) & (raw[:, 0] < 1)).any()
+
+
+@pytest.mark.parametrize("sigma", SIGMAS)
+def test_hdr_matches_issue_formula(rng, sigma):
+    n = 4096
+    d, w = f32(random_hemisphere(rng, n, 0.01)), f32(random_hemisphere(rng, n, 0.01))
+    m_d = np.array([2.6, 1.1, 0.3])          # hdr: no clamp
+    v, _ = evaluate(load(sigma=sigma, reflectance=rgb(m_d)), wi=w, wo=d)
+    expected = hdr_reference(d, w, m_d, sigma)
+    np.testing.assert_allclose(v, expected, rtol=2e-4, atol=1e-6)
+    assert v.max() > 1.0 / np.pi              # unclamped values above the scanline's 1/π·...
+
+
+def test_sigma_texture(rng):
+    """σ from a texture: each lane uses its own σ (Mitsuba's checkerboard)."""
+    n = 4096
+    d, w = f32(random_hemisphere(rng, n, 0.01)), f32(random_hemisphere(rng, n, 0.01))
+    tex = {"type": "checkerboard", "color0": 0.1, "color1": 1.3}
+    for method in METHODS:
+        bsdf = load(sigma=tex, method=method, reflectance=1.0)
+        si = surface(w)
+        si.uv = mi.Point2f(rng.random(n), rng.random(n))
+        v = np.array(bsdf.eval(mi.BSDFContext(), si, vec(d)))[0]
+        sigma = np.array(mi.load_dict(tex).eval_1(si))
+        assert sorted(set(np.round(sigma.astype(float), 5))) == [0.1, 1.3]
+        expected = hdr_reference(d, w, np.ones(3), sigma)[:, 0]
+        tol = 2e-4 if method == "exact" else 0.05
+        np.testing.assert_allclose(v, expected, rtol=tol, atol=1e-6 if method == "exact" else 5e-3)
+
+
+def test_below_surface_is_black(rng):
+    d, w = random_hemisphere(rng, 512, 0.01), random_hemisphere(rng, 512, 0.01)
+    for mode, method in itertools.product(["scanline", "hdr"], METHODS):
+        bsdf = load(mode=mode, method=method, sigma=1.0)
+        for wi, wo in [(w, d * [1, 1, -1]), (w * [1, 1, -1], d)]:
+            v, p = evaluate(bsdf, wi, wo)
+            assert not v.any() and not p.any()
+
+
+# ----------------------------------------------------------------------------
+#  σ = 0 is Lambert, exactly
+# ----------------------------------------------------------------------------
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("reflectance", [0.5, [0.8, 0.4, 0.1]])
+def test_sigma_zero_equals_mitsuba_diffuse(rng, method, reflectance):
+    n = 4096
+    wi, wo = random_hemisphere(rng, n), random_hemisphere(rng, n)
+    wo[: n // 4, 2] *= -1          # lights below the surface too
+    wi[n // 4: n // 2, 2] *= -1    # and viewers below it
+    value = rgb(reflectance) if isinstance(reflectance, list) else reflectance
+    ours = load(sigma=0.0, method=method, reflectance=value)
+    ref = mi.load_dict({"type": "diffuse", "reflectance": value})
+    v, p = evaluate(ours, wi, wo)
+    v_ref, p_ref = evaluate(ref, wi, wo)
+    np.testing.assert_allclose(v, v_ref, rtol=1e-6, atol=0)
+    np.testing.assert_allclose(p, p_ref, rtol=1e-6, atol=0)
+    assert np.count_nonzero(v[:, 0]) > n // 3
+
+
+# ----------------------------------------------------------------------------
+#  Degenerate directions
+# ----------------------------------------------------------------------------
+
+@pytest.mark.parametrize("method", METHODS)
+def test_direction_along_normal(method):
+    """v_i or v_r of length 0: G is 0 (and β = 0 anyway): the value is A·Lambert."""
+    sigma, m_d = 1.0, 0.7
+    A = 1 - 0.5 * sigma**2 / (sigma**2 + 0.33)
+    n = np.array([[0.0, 0.0, 1.0]])
+    t = np.array([[0.6, 0.0, 0.8]])
+    wi = np.concatenate([n, n, t])
+    wo = np.concatenate([n, t, n])
+    v, _ = evaluate(load(sigma=sigma, method=method, reflectance=m_d), wi, wo)
+    np.testing.assert_allclose(v[:, 0], m_d * A / np.pi * wo[:, 2], rtol=1e-5)
+
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("mode", ["hdr", "scanline"])
+def test_grazing_is_bounded(method, mode):
+    """tan β → ∞ as both directions graze the surface; eval stays finite and
+    below m_D (A + B) (÷π in hdr), as tan β·cos θ_o <= 1."""
+    sigma = HALF_PI
+    A = 1 - 0.5 * sigma**2 / (sigma**2 + 0.33)
+    B = 0.45 * sigma**2 / (sigma**2 + 0.09)
+    cosines = [0.0, 1e-7, 1e-6, 1e-4, 1e-2]
+    dirs = [np.array([math.sqrt(1 - c * c), 0.0, c]) for c in cosines]
+    wi = np.array([a for a, b in itertools.product(dirs, dirs)])
+    wo = np.array([b for a, b in itertools.product(dirs, dirs)])
+    v, p = evaluate(load(sigma=sigma, method=method, mode=mode, reflectance=1.0), wi, wo)
+    assert np.isfinite(v).all() and np.isfinite(p).all()
+    bound = (A + B) / (1.0 if mode == "scanline" else np.pi)
+    assert v.max() <= bound * (1 + 1e-5)
+    # The model's own limit: light slightly above a grazing viewer, same azimuth:
+    # sin α sin β cos θ_o / cos β -> 1, eval -> m_D (A·0 + B) (÷π).
+    k = cosines.index(1e-4) * len(cosines) + cosines.index(1e-2)   # wi 1e-4, wo 1e-2
+    if method == "exact":
+        assert v[k, 0] == pytest.approx(bound * (B + A * 1e-2) / (A + B), rel=1e-3)
+
+
+# ----------------------------------------------------------------------------
+#  Reciprocity (hdr)
+# ----------------------------------------------------------------------------
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("sigma", [0.3, 1.2])
+def test_reciprocity(rng, method, sigma):
+    n = 8192
+    a, b = random_hemisphere(rng, n, 0.01), random_hemisphere(rng, n, 0.01)
+    bsdf = load(sigma=sigma, method=method, reflectance=rgb([0.9, 0.5, 0.2]))
+    v_ab, _ = evaluate(bsdf, wi=a, wo=b)
+    v_ba, _ = evaluate(bsdf, wi=b, wo=a)
+    np.testing.assert_allclose(v_ab / f32(b)[:, 2:3], v_ba / f32(a)[:, 2:3], rtol=2e-5)
+
+
+# ----------------------------------------------------------------------------
+#  The table against the exact formulas
+# ----------------------------------------------------------------------------
+
+def table_errors(res, d, w):
+    """Errors of the table's hdr eval (m_D = 1, σ = π/2, the largest B) against
+    the exact one on the same direction pairs: max, RMS, max with both cosines
+    >= 0.1, and the maximum relative error there."""
+    exact = evaluate(load(sigma=HALF_PI), w, d)[0][:, 0]
+    table = evaluate(load(sigma=HALF_PI, method="table", table_resolution=res), w, d)[0][:, 0]
+    err = np.abs(table - exact)
+    away = (d[:, 2] >= 0.1) & (w[:, 2] >= 0.1)
+    return (err.max(), np.sqrt(np.mean(err**2)), err[away].max(),
+            (err[away] / exact[away]).max())
+
+
+def test_table_error_is_bounded_and_falls_with_resolution(rng, capsys):
+    n = 400_000
+    d, w = random_hemisphere(rng, n), random_hemisphere(rng, n)   # uniform on the hemisphere
+    peak = (1 - 0.5 * HALF_PI**2 / (HALF_PI**2 + 0.33) + 0.45 * HALF_PI**2 / (HALF_PI**2 + 0.09)) / np.pi
+    results = {res: table_errors(res, d, w) for res in (16, 64, 256)}
+    with capsys.disabled():
+        print(f"\noren_nayar table vs exact, hdr eval, m_D = 1, sigma = pi/2 (eval <= {peak:.4f}),"
+              f" {n} uniform direction pairs:")
+        for res, (mx, rms, mx_away, rel_away) in results.items():
+            print(f"  table_resolution {res:3d}: max |err| {mx:.5f}, RMS {rms:.6f};"
+                  f" both cos >= 0.1: max |err| {mx_away:.6f} (max relative {rel_away:.3%})")
+    mx, rms, mx_away, rel_away = results[64]           # the default resolution
+    assert mx < 0.2 * peak                             # worst case: both directions grazing
+    assert rms < 2e-3
+    assert mx_away < 5e-3 and rel_away < 0.05
+    # Refinement helps: the RMS error falls about linearly with the node
+    # spacing h, the worst error away from grazing about as sqrt(h) (the
+    # sqrt(1 - cos²) of sin α and tan β near the normal).
+    for lo, hi in [(16, 64), (64, 256)]:
+        assert results[hi][1] < 0.35 * results[lo][1]
+        assert results[hi][2] < 0.7 * results[lo][2]
+
+
+def test_table_default_resolution_is_64():
+    assert load(method="table").table_resolution == 64
+
+
+# ----------------------------------------------------------------------------
+#  White furnace (hdr): quadrature independent of the plugin's sampler
+# ----------------------------------------------------------------------------
+
+NU, NV = 512, 1024
+THETAS = (0, 15, 30, 45, 60, 75, 80, 85, 88, 89)
+
+
+@pytest.fixture(scope="module")
+def hemisphere():
+    """Jittered stratified directions, uniform in (cos θ_o, φ_o): density 1/(2π)."""
+    rng = np.random.default_rng(27182)
+    u = ((np.arange(NU)[:, None] + rng.random((NU, NV))) / NU).ravel()
+    v = ((np.arange(NV)[None, :] + rng.random((NU, NV))) / NV).ravel()
+    s = np.sqrt(np.maximum(0.0, 1.0 - u * u))
+    return mi.Vector3f(s * np.cos(2 * np.pi * v), s * np.sin(2 * np.pi * v), u)
+
+
+def albedos(bsdf, wo, thetas=THETAS):
+    """{θ_i: E(θ_i)} = 2π mean(eval) over the uniform hemisphere (channel 0)."""
+    out = {}
+    for th in thetas:
+        t = math.radians(th)
+        si = dr.zeros(mi.SurfaceInteraction3f)
+        si.wi = mi.Vector3f(dr.opaque(mi.Float, math.sin(t)), 0.0,
+                            dr.opaque(mi.Float, math.cos(t)))
+        value = bsdf.eval(mi.BSDFContext(), si, wo)
+        out[th] = float(dr.sum(mi.Float64(value[0]))[0]) * 2 * np.pi / dr.width(wo)
+    return out
+
+
+@functools.lru_cache(maxsize=None)
+def reference_albedo(theta, sigma, n_mu=512, n_phi=512):
+    """Float64 Gauss-Legendre (cos θ_o) x midpoint (φ_o) quadrature of the NumPy
+    transcription."""
+    x, wt = np.polynomial.legendre.leggauss(n_mu)
+    mu, w_mu = 0.5 * (x + 1), 0.5 * wt
+    phi = (np.arange(n_phi) + 0.5) * 2 * np.pi / n_phi
+    MU, PH = np.meshgrid(mu, phi, indexing="ij")
+    S = np.sqrt(1 - MU**2)
+    d = np.stack([S * np.cos(PH), S * np.sin(PH), MU], -1).reshape(-1, 3)
+    t = math.radians(theta)
+    w = np.tile([math.sin(t), 0.0, math.cos(t)], (len(d), 1))
+    f = hdr_reference(d, w, np.ones(1), sigma)[:, 0].reshape(MU.shape)
+    return float(np.sum(f * w_mu[:, None]) * 2 * np.pi / n_phi)
+
+
+def _fmt(values):
+    return ", ".join(f"{th}°: {e:.4f}" for th, e in values.items())
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_furnace(hemisphere, capsys, method):
+    results = {s: albedos(load(sigma=s, method=method, reflectance=1.0), hemisphere)
+               for s in (0.0, 0.2, 0.5, 1.0, HALF_PI)}
+    with capsys.disabled():
+        print(f"\noren_nayar ({method}) white furnace, hdr, m_D = 1: albedo E(theta_i)")
+        for s, values in results.items():
+            print(f"  sigma = {s:.3f}: {_fmt(values)}")
+    # σ = 0: Lambert, E = 1 within 1 %.
+    assert all(abs(e - 1) < 0.01 for e in results[0.0].values()), _fmt(results[0.0])
+    # Large σ loses energy at every angle; at normal incidence β = 0 and E = A.
+    for s in (0.5, 1.0, HALF_PI):
+        A = 1 - 0.5 * s**2 / (s**2 + 0.33)
+        assert max(results[s].values()) < 0.96, _fmt(results[s])
+        assert results[s][0] == pytest.approx(A, abs=2e-3)
+    # Small σ at grazing incidence: the qualitative model slightly exceeds 1.
+    small = results[0.2]
+    assert 1.005 < small[88] < 1.025 and small[88] > small[75] > small[0], _fmt(small)
+    # The plugin's E equals a float64 quadrature of the NumPy transcription.
+    tol = 2e-3 if method == "exact" else 6e-3
+    for s in (0.2, HALF_PI):
+        for th in (0, 60, 88):
+            assert results[s][th] == pytest.approx(reference_albedo(th, s), abs=tol), (s, th)
+
+
+# ----------------------------------------------------------------------------
+#  Sampling: χ² and sample()/eval()/pdf() consistency
+# ----------------------------------------------------------------------------
+
+CHI2_CASES = [({"type": "oren_nayar", "sigma": s, "method": m}, th)
+              for s, m in [(0.0, "exact"), (0.5, "table"), (HALF_PI, "exact")]
+              for th in (0, 45, 85)]
+CHI2_CASES.append(({"type": "oren_nayar", "sigma": 1.0, "mode": "scanline",
+                    "reflectance": rgb([2.0, 0.5, 0.1])}, 60))
+
+
+@pytest.mark.parametrize("case", CHI2_CASES,
+                         ids=[f"{c[0].get('sigma')}-{c[0].get('method', c[0].get('mode'))}-{c[1]}"
+                              for c in CHI2_CASES])
+def test_chi2(case):
+    params, theta = case
+    t = math.radians(theta)
+    sample_func, pdf_func = mi.chi2.BSDFAdapter("oren_nayar", params,
+                                                wi=[math.sin(t), 0.0, math.cos(t)])
+    chi2 = mi.chi2.ChiSquareTest(domain=mi.chi2.SphericalDomain(), pdf_func=pdf_func,
+                                 sample_func=sample_func, sample_dim=3,
+                                 sample_count=1_000_000, res=101, ires=16)
+    assert chi2.run(significance_level=0.01, test_count=len(CHI2_CASES), quiet=True), chi2.messages
+
+
+@pytest.mark.parametrize("params", [{"sigma": 0.7}, {"sigma": HALF_PI, "method": "table"},
+                                    {"sigma": 0.4, "mode": "scanline",
+                                     "reflectance": rgb([1.8, 0.6, 0.2])}])
+def test_sample_weight_matches_eval_over_pdf(rng, params):
+    n = 100_000
+    wi = random_hemisphere(rng, n)
+    wi[: n // 8, 2] *= -1                                  # viewers below the surface
+    bsdf = load(**params)
+    ctx = mi.BSDFContext()
+    si = surface(wi)
+    bs, weight = bsdf.sample(ctx, si, mi.Float(rng.random(n)),
+                             mi.Point2f(rng.random(n), rng.random(n)))
+    value, pdf = bsdf.eval(ctx, si, bs.wo), bsdf.pdf(ctx, si, bs.wo)
+    weight, value = np.array(weight).T, np.array(value).T
+    bs_pdf, pdf, wo = np.array(bs.pdf), np.array(pdf), np.array(bs.wo).T
+    assert np.isfinite(weight).all() and np.isfinite(bs_pdf).all()
+    ok = bs_pdf > 0
+    below = wi[:, 2] <= 0
+    assert not (ok & below).any() and ok[~below].mean() > 0.99
+    assert np.all(weight[~ok] == 0) and np.all(wo[ok, 2] > 0)
+    np.testing.assert_allclose(weight[ok] * bs_pdf[ok, None], value[ok], rtol=1e-4, atol=1e-6)
+    np.testing.assert_allclose(pdf[ok], bs_pdf[ok], rtol=1e-5)
+    np.testing.assert_allclose(bs_pdf[ok], wo[ok, 2] / np.pi, rtol=1e-4)   # cosine hemisphere
+
+
+# ----------------------------------------------------------------------------
+#  No NaN or Inf at the extremes
+# ----------------------------------------------------------------------------
+
+def extreme_directions():
+    """Normal, oblique, grazing (cos 1e-6 and 0); every pair, wi = wo, and below."""
+    dirs = [np.array([0.0, 0.0, 1.0]), np.array([0.6, 0.0, 0.8])]
+    for c in (1e-6, 0.0):
+        s = math.sqrt(1 - c * c)
+        dirs += [np.array([s, 0.0, c]), np.array([0.0, -s, c])]
+    pairs = [(a, b) for a in dirs for b in dirs] + [(a, -a) for a in dirs] \
+        + [(a, b * [1, 1, -1]) for a in dirs for b in dirs]
+    return np.array([p[0] for p in pairs]), np.array([p[1] for p in pairs])
+
+
+def finite(x):
+    return bool(np.all(np.isfinite(np.array(x))))
+
+
+@pytest.mark.parametrize("sigma", [0.0, HALF_PI])
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("mode", ["hdr", "scanline"])
+def test_no_nan_or_inf(sigma, method, mode):
+    bsdf = load(sigma=sigma, method=method, mode=mode)
+    params = mi.traverse(bsdf)
+    keys = ["sigma.value", "reflectance.value"]
+    for key in keys:
+        dr.enable_grad(params[key])
+    params.update()
+    wi, wo = extreme_directions()
+    ctx = mi.BSDFContext()
+    si = surface(wi)
+    value, pdf = bsdf.eval_pdf(ctx, si, vec(wo))
+    assert finite(value) and finite(pdf)
+    assert np.all(np.array(value) >= 0) and np.all(np.array(pdf) >= 0)
+    dr.backward(dr.sum(dr.sum(value)) + dr.sum(pdf))
+    for key in keys:
+        assert finite(dr.grad(params[key])), key
+    u = np.array([0.0, 1e-7, 0.5, 1 - 1e-7])
+    s1, s2x, s2y = (a.ravel() for a in np.meshgrid(u, u, u))
+    si = surface(np.repeat(wi, len(s1), axis=0))
+    bs, weight = bsdf.sample(ctx, si, mi.Float(np.tile(s1, len(wi))),
+                             mi.Point2f(np.tile(s2x, len(wi)), np.tile(s2y, len(wi))))
+    assert finite(weight) and finite(bs.pdf) and finite(bs.wo)
+
+
+# ----------------------------------------------------------------------------
+#  Bad input: load-time errors naming plugin, parameter, value and range
+# ----------------------------------------------------------------------------
+
+ERRORS = [
+    ({"sigma": -0.1}, "sigma", "-0.1", "[0, 1.5708]"),
+    ({"sigma": 1.6}, "sigma", "1.6", "[0, 1.5708]"),
+    ({"sigma": float("nan")}, "sigma", "nan", "[0, 1.5708]"),
+    ({"sigma": {"type": "checkerboard", "color0": 0.2, "color1": 2.0}}, "sigma", "2.0",
+     "[0, 1.5708]"),
+    ({"reflectance": rgb([0.5, -0.2, 0.1])}, "reflectance", "-0.2", "[0, inf]"),
+    ({"method": "fast"}, "method", "'fast'", '"exact", "table"'),
+    ({"method": "table", "table_resolution": 1}, "table_resolution", "1", "[2, 4096]"),
+    ({"method": "table", "table_resolution": 5000}, "table_resolution", "5000", "[2, 4096]"),
+    ({"method": "table", "table_resolution": 64.5}, "table_resolution", "64.5",
+     "an integer in [2, 4096]"),
+    ({"table_resolution": 32}, "table_resolution", "32", 'only with method="table"'),
+    ({"mode": "ldr"}, "mode", "'ldr'", '"scanline", "hdr"'),
+]
+
+
+@pytest.mark.parametrize("config, name, value, valid", ERRORS,
+                         ids=[f"{e[1]}={e[2]}" for e in ERRORS])
+def test_bad_input_is_a_clear_load_time_error(config, name, value, valid):
+    with pytest.raises(Exception) as info:
+        load(**config)
+    last = str(info.value).strip().splitlines()[-1]
+    assert re.search(rf"oren_nayar: parameter '{name}' = {re.escape(value)}", last), last
+    assert valid in last, last
+
+
+@pytest.mark.parametrize("config", [{"sigma": 0.0}, {"sigma": HALF_PI},
+                                    {"method": "table", "table_resolution": 2},
+                                    {"reflectance": rgb([3.0, 1.5, 0.0])}])
+def test_edge_values_are_accepted(config):
+    load(**config)
+
+
+def test_zero_reflectance_has_no_lobe():
+    assert load(reflectance=0.0).flags() == 0
+    assert load().flags() == mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide
+
+
+# ----------------------------------------------------------------------------
+#  Differentiable parameters
+# ----------------------------------------------------------------------------
+
+def test_traverse_lists_every_parameter_as_differentiable():
+    for method in METHODS:
+        params = mi.traverse(load(method=method))
+        assert set(params.keys()) == {"reflectance.value", "sigma.value"}
+        for key in params.keys():
+            assert not (params.flags(key) & mi.ParamFlags.NonDifferentiable), key
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_update_matches_a_fresh_load(rng, method):
+    wi, wo = random_hemisphere(rng, 512, 0.05), random_hemisphere(rng, 512, 0.05)
+    bsdf = load(method=method, sigma=0.2)
+    params = mi.traverse(bsdf)
+    params["sigma.value"] = 1.1
+    params.update()
+    np.testing.assert_allclose(evaluate(bsdf, wi, wo)[0],
+                               evaluate(load(method=method, sigma=1.1), wi, wo)[0], rtol=1e-6)
+
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("key", ["sigma", "reflectance"])
+def test_gradient_matches_finite_differences(rng, method, key):
+    config = {"sigma": 0.4, "reflectance": 0.6, "method": method}
+    wi, wo = random_hemisphere(rng, 512, 0.05), random_hemisphere(rng, 512, 0.05)
+    bsdf = load(**config)
+    params = mi.traverse(bsdf)
+    dr.enable_grad(params[key + ".value"])
+    params.update()
+    dr.backward(dr.sum(dr.sum(bsdf.eval(mi.BSDFContext(), surface(wi), vec(wo)))))
+    grad = float(dr.sum(dr.grad(params[key + ".value"]))[0])
+    h = 1e-3
+
+    def total(x):
+        return float(evaluate(load(**{**config, key: x}), wi, wo)[0].astype(np.float64).sum())
+
+    fd = (total(config[key] + h) - total(config[key] - h)) / (2 * h)
+    assert abs(grad) > 1e-2
+    np.testing.assert_allclose(grad, fd, rtol=1e-2)

@@ -1,0 +1,579 @@
+"""toon: the lecture's stepped colours (NumPy) in both modes, smooth bands and
+ramps, the dark side for lights behind, the white-furnace report, sampling,
+extremes, errors and differentiability."""
+import itertools
+import math
+import re
+
+import numpy as np
+import pytest
+
+import drjit as dr
+import mitsuba as mi
+
+from conftest import evaluate, random_hemisphere, surface, vec
+from mi_brdfs.plugin import register_plugin
+from mi_brdfs.toon import Toon
+
+register_plugin(Toon)               # not yet in mi_brdfs.PLUGINS
+
+MODELS = ["phong", "blinn"]
+
+
+def rgb(c):
+    return {"type": "rgb", "value": list(map(float, c))}
+
+
+def load(**kw):
+    return mi.load_dict({"type": "toon", **kw})
+
+
+def f32(a):
+    return np.asarray(a, dtype=np.float32).astype(np.float64)
+
+
+def ramp_texture(colours, filter_type="bilinear"):
+    """A 1-D ramp: a bitmap one pixel high, left edge cos = -1, right edge +1."""
+    data = np.asarray(colours, dtype=np.float32)[None, :, :]
+    return {"type": "bitmap", "bitmap": mi.Bitmap(data), "raw": True,
+            "wrap_mode": "clamp", "filter_type": filter_type}
+
+
+# ----------------------------------------------------------------------------
+#  An independent NumPy transcription of the lecture (d light, w viewer, n = z)
+# ----------------------------------------------------------------------------
+
+def lecture_cosines(d, w):
+    """d·n, ω_r·r with r = 2(d·n)n - d, and n·h with h = normalize(d + ω_r)."""
+    n = np.array([0.0, 0.0, 1.0])
+    dn = d @ n
+    r = 2 * dn[:, None] * n - d
+    h = d + w
+    h /= np.linalg.norm(h, axis=1, keepdims=True)
+    return dn, np.sum(w * r, axis=1), h @ n
+
+
+def smoothstep_weight(c, t, width):
+    if width == 0:
+        return (c >= t).astype(np.float64)
+    x = np.clip((c - t) / width + 0.5, 0, 1)
+    return x * x * (3 - 2 * x)
+
+
+def ramp_colour(colours, c, filter_type):
+    """Bilinear (texel centres at (i + 1/2)/N, clamped) or nearest lookup at
+    u = (c + 1)/2."""
+    colours = np.asarray(colours, dtype=np.float64)
+    n = len(colours)
+    u = (c + 1) / 2
+    if filter_type == "nearest":
+        return colours[np.clip(np.floor(u * n).astype(int), 0, n - 1)]
+    xp = (np.arange(n) + 0.5) / n
+    return np.stack([np.interp(u, xp, colours[:, k]) for k in range(3)], axis=1)
+
+
+def lecture_toon(d, w, p):
+    """(f_diffuse, f_specular) of the lecture's toon model, per direction pair."""
+    dn, c_phong, c_blinn = lecture_cosines(d, w)
+    c = c_phong if p.get("specular_model", "phong") == "phong" else c_blinn
+    width = p.get("smoothness", 0.0)
+    if "diffuse_ramp" in p:
+        f_d = ramp_colour(p["diffuse_ramp"], dn, p.get("ramp_filter", "bilinear"))
+    else:
+        k = smoothstep_weight(dn, p["t_D"], width)[:, None]
+        f_d = p["m_D2"] + (p["m_D1"] - p["m_D2"]) * k
+    if "specular_ramp" in p:
+        f_s = ramp_colour(p["specular_ramp"], c, p.get("ramp_filter", "bilinear"))
+    else:
+        k = smoothstep_weight(c, p["t_S"], width)[:, None]
+        f_s = p["m_S2"] + (p["m_S1"] - p["m_S2"]) * k
+    f_s = np.where(dn[:, None] > 0, f_s, 0.0)         # no highlight from lights behind
+    return f_d, f_s
+
+
+def reference(d, w, p, mode):
+    """scanline: clamp01(f_d) + clamp01(f_s); hdr: f_d + f_s; 0 for a viewer below."""
+    f_d, f_s = lecture_toon(d, w, p)
+    v = np.clip(f_d, 0, 1) + np.clip(f_s, 0, 1) if mode == "scanline" else f_d + f_s
+    return np.where(w[:, 2:3] > 0, v, 0.0)
+
+
+def plugin_dict(p):
+    out = {"specular_model": p.get("specular_model", "phong")}
+    if "smoothness" in p:
+        out["smoothness"] = p["smoothness"]
+    if "diffuse_ramp" in p:
+        out["diffuse_ramp"] = ramp_texture(p["diffuse_ramp"], p.get("ramp_filter", "bilinear"))
+    else:
+        out.update(diffuse_reflectance=rgb(p["m_D1"]), diffuse_shade=rgb(p["m_D2"]),
+                   diffuse_threshold=p["t_D"])
+    if "specular_ramp" in p:
+        out["specular_ramp"] = ramp_texture(p["specular_ramp"], p.get("ramp_filter", "bilinear"))
+    else:
+        out.update(specular_reflectance=rgb(p["m_S1"]), specular_shade=rgb(p["m_S2"]),
+                   specular_threshold=p["t_S"])
+    return out
+
+
+COLOURS = {"m_D1": np.array([1.6, 0.8, 0.3]), "m_D2": np.array([0.3, 1.4, 0.1]),
+           "m_S1": np.array([2.0, 1.0, 0.5]), "m_S2": np.array([0.0, 0.2, 1.3]),
+           "t_D": 0.3, "t_S": 0.6}
+
+
+def direction_pairs(rng, n):
+    """Viewers mostly above (1/8 below), lights a quarter below the surface;
+    half of the lights near the mirror direction (inside the highlight)."""
+    w = random_hemisphere(rng, n)
+    d = random_hemisphere(rng, n)
+    m = n // 2
+    d[:m] = np.column_stack([-w[:m, 0], -w[:m, 1], w[:m, 2]]) + 0.5 * rng.normal(size=(m, 3))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    d[:, 2] = np.abs(d[:, 2])
+    d[n - n // 4:, 2] *= -1                        # lights behind the surface
+    w[: n // 8, 2] *= -1                           # viewers below
+    return f32(d), f32(w)
+
+
+def away_from_steps(d, w, p):
+    """Pairs whose cosines are not within float32 rounding of a hard step."""
+    dn, c_phong, c_blinn = lecture_cosines(d, w)
+    c = c_phong if p.get("specular_model", "phong") == "phong" else c_blinn
+    keep = np.ones(len(d), bool)
+    if "t_D" in p:
+        keep &= np.abs(dn - p["t_D"]) > 1e-5
+    if "t_S" in p:
+        keep &= np.abs(c - p["t_S"]) > 1e-5
+    return keep
+
+
+CASES = [dict(COLOURS, specular_model=m, smoothness=s) for m in MODELS for s in (0.0, 0.3)]
+
+
+@pytest.mark.parametrize("mode", ["scanline", "hdr"])
+@pytest.mark.parametrize("p", CASES, ids=[f"{c['specular_model']}-w={c['smoothness']}" for c in CASES])
+def test_matches_lecture(rng, mode, p):
+    n = 8192
+    d, w = direction_pairs(rng, n)
+    keep = away_from_steps(d, w, p)
+    v, _ = evaluate(load(mode=mode, **plugin_dict(p)), wi=w[keep], wo=d[keep])
+    expected = reference(d[keep], w[keep], p, mode)
+    np.testing.assert_allclose(v, expected, rtol=1e-5, atol=1e-5)
+    f_d, f_s = lecture_toon(d[keep], w[keep], p)
+    up = w[keep, 2] > 0
+    # Every branch is exercised: both diffuse tones, both specular tones, the
+    # clamps (colours above 1), the dark side for lights behind.
+    dn, c_phong, c_blinn = lecture_cosines(d[keep], w[keep])
+    c = c_phong if p["specular_model"] == "phong" else c_blinn
+    for mask in (dn >= p["t_D"], dn < p["t_D"], dn < 0, (c >= p["t_S"]) & (dn > 0),
+                 (c < p["t_S"]) & (dn > 0)):
+        assert np.count_nonzero(mask & up) > 100
+    assert (f_s > 1).any() and (f_d > 1).any()
+    behind = (d[keep, 2] < 0) & up
+    if p["smoothness"] == 0:
+        dark = np.clip(p["m_D2"], 0, 1) if mode == "scanline" else p["m_D2"]
+        np.testing.assert_allclose(v[behind], np.broadcast_to(dark, v[behind].shape), rtol=1e-6)
+
+
+@pytest.mark.parametrize("mode", ["scanline", "hdr"])
+@pytest.mark.parametrize("filter_type", ["nearest", "bilinear"])
+def test_ramps(rng, mode, filter_type):
+    """1-D ramp textures looked up at u = (cos + 1)/2 replace the two tones."""
+    p = {"diffuse_ramp": [[0.05, 0.02, 0.1], [0.2, 0.1, 0.3], [0.5, 0.4, 0.2],
+                          [0.9, 0.7, 0.3], [1.6, 1.2, 0.5]],
+         "specular_ramp": [[0.0, 0.0, 0.0]] * 6 + [[0.3, 0.3, 0.3], [2.0, 1.5, 1.0]],
+         "ramp_filter": filter_type, "specular_model": "blinn"}
+    n = 8192
+    d, w = direction_pairs(rng, n)
+    dn, _, c = lecture_cosines(d, w)
+    keep = np.ones(n, bool)
+    if filter_type == "nearest":      # not on a texel boundary
+        for cos, texels in ((dn, 5), (c, 8)):
+            u = (cos + 1) / 2 * texels
+            keep &= np.abs(u - np.round(u)) > 1e-4
+    v, _ = evaluate(load(mode=mode, **plugin_dict(p)), wi=w[keep], wo=d[keep])
+    np.testing.assert_allclose(v, reference(d[keep], w[keep], p, mode), rtol=1e-5, atol=1e-5)
+    assert len(np.unique(np.round(v[:, 0], 4))) >= (5 if filter_type == "nearest" else 100)
+
+
+def test_thresholds_exactly_hit():
+    """A cosine equal to its threshold takes the first colour (>=); with a
+    smooth band it is the mean of both. No NaN."""
+    wi = np.array([[0.0, 0.0, 1.0]] * 2)                    # viewer along n: ω_r·r = d·n
+    wo = np.array([[math.sqrt(0.75), 0.0, 0.5], [0.0, math.sqrt(1 - 0.75**2), 0.75]])
+    base = {"diffuse_reflectance": 0.9, "diffuse_shade": 0.1, "diffuse_threshold": 0.5,
+            "specular_reflectance": 0.6, "specular_shade": 0.2, "specular_threshold": 0.75}
+    v, p = evaluate(load(**base), wi, wo)
+    assert np.isfinite(v).all() and np.isfinite(p).all()
+    # d·n = 0.5 = t_D: m_D1; ω_r·r = 0.5 < t_S: m_S2
+    np.testing.assert_allclose(v[0], 0.9 + 0.2, rtol=1e-6)
+    # d·n = 0.75 >= t_D: m_D1; ω_r·r = 0.75 = t_S: m_S1
+    np.testing.assert_allclose(v[1], 0.9 + 0.6, rtol=1e-6)
+    v, _ = evaluate(load(**base, smoothness=0.2), wi, wo)
+    np.testing.assert_allclose(v[0], 0.5 + 0.2, rtol=1e-6)   # diffuse band midpoint
+    np.testing.assert_allclose(v[1], 0.9 + 0.4, rtol=1e-6)   # specular band midpoint
+
+
+# ----------------------------------------------------------------------------
+#  Lights behind, viewers below, flags
+# ----------------------------------------------------------------------------
+
+@pytest.mark.parametrize("mode", ["scanline", "hdr"])
+def test_lights_behind_see_the_dark_side_viewers_below_see_nothing(rng, mode):
+    w, d = random_hemisphere(rng, 1024, 0.01), random_hemisphere(rng, 1024, 0.01)
+    bsdf = load(mode=mode, diffuse_shade=rgb([0.3, 0.2, 0.1]), specular_shade=0.5,
+                specular_threshold=-1.0)                     # highlight everywhere above
+    v, p = evaluate(bsdf, wi=w, wo=d * [1, 1, -1])           # lights behind
+    np.testing.assert_allclose(v, np.broadcast_to([0.3, 0.2, 0.1], v.shape), rtol=1e-6)
+    assert not p.any()                                        # never sampled there
+    v, p = evaluate(bsdf, wi=w * [1, 1, -1], wo=d)            # viewers below
+    assert not v.any() and not p.any()
+    v, _ = evaluate(bsdf, wi=w * [1, 1, -1], wo=d * [1, 1, -1])
+    assert not v.any()
+
+
+def test_scanline_integrator_shows_the_dark_side():
+    """A sphere lit only from behind, rendered by the scan-line integrator (no
+    shadows): the side facing the camera is m_D2 times the light, not black."""
+    scene = mi.load_dict({
+        "type": "scene", "integrator": {"type": "scanline"},
+        "sensor": {"type": "perspective", "fov": 20,
+                   "to_world": mi.ScalarTransform4f().look_at(origin=[0, 0, 6], target=[0, 0, 0],
+                                                              up=[0, 1, 0]),
+                   "film": {"type": "hdrfilm", "width": 16, "height": 16,
+                            "rfilter": {"type": "box"}},
+                   "sampler": {"type": "independent", "sample_count": 1}},
+        "sphere": {"type": "sphere", "radius": 0.5,
+                   "bsdf": {"type": "toon", "mode": "scanline", "diffuse_shade": rgb([0.3, 0.2, 0.1])}},
+        "light": {"type": "point", "position": [0, 0, -10], "intensity": rgb([100, 100, 100])},
+    })
+    image = np.array(mi.render(scene))
+    centre = image[8, 8]
+    # the light at distance ~10.5 from the visible (front) side: E = 100/r²
+    assert 0.05 < centre[0] < 0.5
+    np.testing.assert_allclose(centre / centre[0], [1, 2 / 3, 1 / 3], rtol=1e-4)
+
+
+def test_flags_declare_smooth_lobes():
+    F = mi.BSDFFlags
+    both = load()
+    assert both.flags() == F.DiffuseReflection | F.GlossyReflection | F.FrontSide
+    assert mi.has_flag(both.flags(), F.Smooth) and both.component_count() == 2
+    diffuse = load(specular_reflectance=0.0)
+    assert diffuse.flags() == F.DiffuseReflection | F.FrontSide
+    glossy = load(diffuse_reflectance=0.0, diffuse_shade=0.0)
+    assert glossy.flags() == F.GlossyReflection | F.FrontSide
+
+
+# ----------------------------------------------------------------------------
+#  White furnace (hdr): the stylised model's "albedo", reported
+# ----------------------------------------------------------------------------
+
+NU, NV = 512, 1024
+THETAS = (0, 15, 30, 45, 60, 75, 85, 89)
+
+
+@pytest.fixture(scope="module")
+def hemisphere():
+    """Jittered stratified directions, uniform in (cos θ_o, φ_o): density 1/(2π)."""
+    rng = np.random.default_rng(16180)
+    u = ((np.arange(NU)[:, None] + rng.random((NU, NV))) / NU).ravel()
+    v = ((np.arange(NV)[None, :] + rng.random((NU, NV))) / NV).ravel()
+    s = np.sqrt(np.maximum(0.0, 1.0 - u * u))
+    return mi.Vector3f(s * np.cos(2 * np.pi * v), s * np.sin(2 * np.pi * v), u)
+
+
+def albedos(bsdf, wo, thetas=THETAS):
+    out = {}
+    for th in thetas:
+        t = math.radians(th)
+        si = dr.zeros(mi.SurfaceInteraction3f)
+        si.wi = mi.Vector3f(dr.opaque(mi.Float, math.sin(t)), 0.0,
+                            dr.opaque(mi.Float, math.cos(t)))
+        value = bsdf.eval(mi.BSDFContext(), si, wo)
+        out[th] = float(dr.sum(mi.Float64(value[0]))[0]) * 2 * np.pi / dr.width(wo)
+    return out
+
+
+def _fmt(values):
+    return ", ".join(f"{th}°: {e:.4f}" for th, e in values.items())
+
+
+FURNACE = {
+    "defaults (phong)": ({}, 2 * np.pi * (0.8 * 0.5 + 0.2 * 0.5) + 2 * np.pi * 0.1),
+    "defaults, blinn": ({"specular_model": "blinn"},
+                        2 * np.pi * 0.5 + 4 * np.pi * (1 - 0.9**2)),
+    "defaults, smoothness 0.2": ({"smoothness": 0.2}, 2 * np.pi * 0.5 + 2 * np.pi * 0.1),
+    "white diffuse only (m_D1 = m_D2 = 1)": ({"diffuse_shade": 1.0, "diffuse_reflectance": 1.0,
+                                             "specular_reflectance": 0.0}, 2 * np.pi),
+}
+
+
+def test_furnace_reports_the_albedo(hemisphere, capsys):
+    """No energy claim: E(θ_i) = ∫ eval dω over the hemisphere, printed, and at
+    normal incidence equal to its closed form (2π(m_D1(1 - t_D) + m_D2 t_D)
+    + the highlight's solid angle: 2π(1 - t_S) phong, 4π(1 - t_S²) blinn)."""
+    results = {label: albedos(load(**cfg), hemisphere) for label, (cfg, _) in FURNACE.items()}
+    with capsys.disabled():
+        print("\ntoon white furnace (hdr; eval = the stepped colour, no cos): E(theta_i)")
+        for label, values in results.items():
+            print(f"  {label}: {_fmt(values)}")
+    for label, (_, closed_form) in FURNACE.items():
+        assert results[label][0] == pytest.approx(closed_form, rel=2e-3), label
+    # A constant colour of 1 over the hemisphere integrates to 2π at every angle.
+    assert all(e == pytest.approx(2 * np.pi, rel=1e-3)
+               for e in results["white diffuse only (m_D1 = m_D2 = 1)"].values())
+    # The highlight cone leaves the hemisphere at grazing incidence: less specular.
+    d = results["defaults (phong)"]
+    assert d[89] < d[0] - 0.2
+
+
+# ----------------------------------------------------------------------------
+#  Sampling: χ² and sample()/eval()/pdf() consistency
+# ----------------------------------------------------------------------------
+
+RAMP = [[0.1, 0.1, 0.1], [0.4, 0.3, 0.2], [1.0, 0.9, 0.8]]
+SPEC_RAMP = [[0.2, 0.2, 0.2]] * 3 + [[1.5, 1.5, 1.5]]
+
+
+def _chi2_configs():
+    configs = []
+    for m in MODELS:
+        configs += [
+            {"specular_model": m},
+            {"specular_model": m, "smoothness": 0.2, "specular_shade": 0.3,
+             "specular_threshold": 0.7},
+            {"specular_model": m, "specular_threshold": 0.97,          # highlight only
+             "diffuse_reflectance": 0.0, "diffuse_shade": 0.0},
+            {"specular_model": m, "specular_threshold": 0.2, "smoothness": 1.0,
+             "diffuse_reflectance": 0.0, "diffuse_shade": 0.0},
+        ]
+    configs.append({"diffuse_ramp": ramp_texture(RAMP), "specular_ramp": ramp_texture(SPEC_RAMP),
+                    "specular_model": "blinn"})
+    configs.append({"mode": "scanline", "diffuse_reflectance": rgb([1.5, 0.5, 0.2]),
+                    "specular_reflectance": 3.0, "specular_threshold": 0.8})
+    return configs
+
+
+CHI2_CASES = [(c, th) for c in _chi2_configs() for th in (0, 30, 60, 85)]
+CHI2_TEST_COUNT = len(CHI2_CASES) + 1          # + the negative control
+
+
+def _case_id(case):
+    c, th = case
+    rest = "-".join(f"{k}={v}" for k, v in c.items() if not isinstance(v, dict))
+    ramps = "-ramps" if "diffuse_ramp" in c else ""
+    return f"{rest}{ramps}-theta={th}"
+
+
+def _chi2(sample_cfg, pdf_cfg, theta):
+    t = math.radians(theta)
+    wi = [math.sin(t), 0.0, math.cos(t)]
+    sample_func, _ = mi.chi2.BSDFAdapter("toon", {"type": "toon", **sample_cfg}, wi=wi)
+    _, pdf_func = mi.chi2.BSDFAdapter("toon", {"type": "toon", **pdf_cfg}, wi=wi)
+    return mi.chi2.ChiSquareTest(domain=mi.chi2.SphericalDomain(), pdf_func=pdf_func,
+                                 sample_func=sample_func, sample_dim=3,
+                                 sample_count=1_000_000, res=201, ires=32)
+
+
+@pytest.mark.parametrize("case", CHI2_CASES, ids=[_case_id(c) for c in CHI2_CASES])
+def test_chi2(case):
+    cfg, theta = case
+    chi2 = _chi2(cfg, cfg, theta)
+    assert chi2.run(significance_level=0.01, test_count=CHI2_TEST_COUNT, quiet=True), chi2.messages
+
+
+def test_chi2_detects_a_wrong_pdf():
+    """Negative control: the highlight cone of t_S = 0.95 against the pdf of
+    t_S = 0.94 must be rejected."""
+    base = {"diffuse_reflectance": 0.0, "diffuse_shade": 0.0}
+    chi2 = _chi2({**base, "specular_threshold": 0.95}, {**base, "specular_threshold": 0.94}, 30)
+    assert not chi2.run(significance_level=0.01, test_count=CHI2_TEST_COUNT, quiet=True)
+
+
+@pytest.mark.parametrize("cfg", _chi2_configs() + [{"specular_threshold": 1.0},
+                                                    {"smoothness": 2.0, "specular_shade": 0.1}],
+                         ids=lambda c: "-".join(f"{k}={v}" for k, v in c.items()
+                                                if not isinstance(v, dict)) or "ramps")
+def test_sample_weight_matches_eval_over_pdf(rng, cfg):
+    n = 100_000
+    wi = random_hemisphere(rng, n)
+    wi[: n // 8, 2] *= -1                                  # viewers below the surface
+    bsdf = load(**cfg)
+    ctx = mi.BSDFContext()
+    si = surface(wi)
+    bs, weight = bsdf.sample(ctx, si, mi.Float(rng.random(n)),
+                             mi.Point2f(rng.random(n), rng.random(n)))
+    value, pdf = bsdf.eval(ctx, si, bs.wo), bsdf.pdf(ctx, si, bs.wo)
+    weight, value = np.array(weight).T, np.array(value).T
+    bs_pdf, pdf, wo = np.array(bs.pdf), np.array(pdf), np.array(bs.wo).T
+    assert np.isfinite(weight).all() and np.isfinite(bs_pdf).all()
+    ok = bs_pdf > 0
+    below = wi[:, 2] <= 0
+    # A real sampler: a usable direction for most upper viewers (blinn with
+    # the whole hemisphere of half vectors reflects ~2/3 of them below, though).
+    assert not (ok & below).any() and ok[~below].mean() > 0.3
+    assert np.all(weight[~ok] == 0) and np.all(wo[ok, 2] > 0)
+    np.testing.assert_allclose(weight[ok] * bs_pdf[ok, None], value[ok], rtol=1e-4, atol=1e-6)
+    np.testing.assert_allclose(pdf[ok], bs_pdf[ok], rtol=1e-4)
+
+
+# ----------------------------------------------------------------------------
+#  No NaN or Inf at the extremes
+# ----------------------------------------------------------------------------
+
+def extreme_directions():
+    """Normal, oblique (cos 0.5 and 0.9: on the default thresholds), grazing
+    (cos 1e-6 and 0); every pair, wi = -wo, and mirrored below."""
+    dirs = [np.array([0.0, 0.0, 1.0]), np.array([math.sqrt(0.75), 0.0, 0.5]),
+            np.array([0.0, math.sqrt(1 - 0.81), 0.9])]
+    for c in (1e-6, 0.0):
+        s = math.sqrt(1 - c * c)
+        dirs += [np.array([s, 0.0, c]), np.array([0.0, -s, c])]
+    pairs = [(a, b) for a in dirs for b in dirs] + [(a, -a) for a in dirs] \
+        + [(a, b * [1, 1, -1]) for a in dirs for b in dirs]
+    return np.array([p[0] for p in pairs]), np.array([p[1] for p in pairs])
+
+
+def finite(x):
+    return bool(np.all(np.isfinite(np.array(x))))
+
+
+EXTREMES = [dict(specular_model=m, mode=mode, smoothness=w, diffuse_threshold=td,
+                 specular_threshold=ts, specular_shade=ss)
+            for m in MODELS for mode in ("hdr", "scanline") for w in (0.0, 2.0)
+            for td, ts in ((0.5, 0.9), (-1.0, 1.0), (1.0, -1.0), (0.0, 0.0))
+            for ss in (0.0, 0.4)]
+
+
+@pytest.mark.parametrize("cfg", EXTREMES, ids=lambda c: "-".join(str(v) for v in c.values()))
+def test_no_nan_or_inf(cfg):
+    bsdf = load(**cfg)
+    params = mi.traverse(bsdf)
+    keys = [k for k in params.keys()]
+    for key in keys:
+        dr.enable_grad(params[key])
+    params.update()
+    wi, wo = extreme_directions()
+    ctx = mi.BSDFContext()
+    si = surface(wi)
+    value, pdf = bsdf.eval_pdf(ctx, si, vec(wo))
+    assert finite(value) and finite(pdf)
+    assert np.all(np.array(value) >= 0) and np.all(np.array(pdf) >= 0)
+    dr.backward(dr.sum(dr.sum(value)) + dr.sum(pdf))
+    for key in keys:
+        assert finite(dr.grad(params[key])), key
+    u = np.array([0.0, 1e-7, 0.5, 1 - 1e-7])
+    s1, s2x, s2y = (a.ravel() for a in np.meshgrid(u, u, u))
+    si = surface(np.repeat(wi, len(s1), axis=0))
+    bs, weight = bsdf.sample(ctx, si, mi.Float(np.tile(s1, len(wi))),
+                             mi.Point2f(np.tile(s2x, len(wi)), np.tile(s2y, len(wi))))
+    assert finite(weight) and finite(bs.pdf) and finite(bs.wo)
+
+
+# ----------------------------------------------------------------------------
+#  Bad input: load-time errors naming plugin, parameter, value and range
+# ----------------------------------------------------------------------------
+
+ERRORS = [
+    ({"diffuse_threshold": 1.5}, "diffuse_threshold", "1.5", "[-1, 1]"),
+    ({"diffuse_threshold": -1.01}, "diffuse_threshold", "-1.01", "[-1, 1]"),
+    ({"specular_threshold": 2.0}, "specular_threshold", "2.0", "[-1, 1]"),
+    ({"specular_threshold": float("nan")}, "specular_threshold", "nan", "[-1, 1]"),
+    ({"specular_threshold": {"type": "checkerboard", "color0": 0.5, "color1": 1.2}},
+     "specular_threshold", "1.2", "[-1, 1]"),
+    ({"smoothness": -0.1}, "smoothness", "-0.1", "[0, 2]"),
+    ({"smoothness": 2.5}, "smoothness", "2.5", "[0, 2]"),
+    ({"diffuse_reflectance": -0.5}, "diffuse_reflectance", "-0.5", "[0, inf]"),
+    ({"diffuse_shade": rgb([0.1, -0.1, 0.0])}, "diffuse_shade", "-0.1", "[0, inf]"),
+    ({"specular_reflectance": -1.0}, "specular_reflectance", "-1.0", "[0, inf]"),
+    ({"specular_shade": -0.2}, "specular_shade", "-0.2", "[0, inf]"),
+    ({"diffuse_ramp": ramp_texture([[0.1, 0.1, 0.1], [-0.5, 0.2, 0.2]])},
+     "diffuse_ramp", "-0.5", "[0, inf]"),
+    ({"specular_model": "ward"}, "specular_model", "'ward'", '"phong", "blinn"'),
+    ({"diffuse_ramp": ramp_texture(RAMP), "diffuse_shade": 0.1}, "diffuse_shade", "0.1",
+     "not with diffuse_ramp"),
+    ({"specular_ramp": ramp_texture(RAMP), "specular_threshold": 0.5}, "specular_threshold",
+     "0.5", "not with specular_ramp"),
+    ({"diffuse_ramp": ramp_texture(RAMP), "specular_ramp": ramp_texture(RAMP),
+      "smoothness": 0.1}, "smoothness", "0.1", "not with both diffuse_ramp and specular_ramp"),
+    ({"mode": "cartoon"}, "mode", "'cartoon'", '"scanline", "hdr"'),
+]
+
+
+@pytest.mark.parametrize("config, name, value, valid", ERRORS,
+                         ids=[f"{e[1]}={e[2]}" for e in ERRORS])
+def test_bad_input_is_a_clear_load_time_error(config, name, value, valid):
+    with pytest.raises(Exception) as info:
+        load(**config)
+    last = str(info.value).strip().splitlines()[-1]
+    assert re.search(rf"toon: parameter '{name}' = {re.escape(value)}", last), last
+    assert valid in last, last
+
+
+@pytest.mark.parametrize("config", [
+    {"diffuse_threshold": -1.0, "specular_threshold": 1.0, "smoothness": 0.0},
+    {"diffuse_threshold": 1.0, "specular_threshold": -1.0, "smoothness": 2.0},
+    {"diffuse_reflectance": rgb([3.0, 0.0, 1.0]), "specular_shade": 0.5},
+    {"diffuse_threshold": {"type": "checkerboard", "color0": -0.5, "color1": 0.5}},
+])
+def test_edge_values_are_accepted(config):
+    load(**config)
+
+
+# ----------------------------------------------------------------------------
+#  Differentiable parameters
+# ----------------------------------------------------------------------------
+
+STEP_KEYS = {"diffuse_reflectance.value", "diffuse_shade.value", "diffuse_threshold.value",
+             "specular_reflectance.value", "specular_shade.value",
+             "specular_threshold.value", "smoothness"}
+
+
+def test_traverse_lists_every_parameter_as_differentiable():
+    for bsdf, keys in [(load(), STEP_KEYS),
+                       (load(diffuse_ramp=ramp_texture(RAMP), specular_ramp=ramp_texture(RAMP)),
+                        {"diffuse_ramp.data", "diffuse_ramp.to_uv", "specular_ramp.data",
+                         "specular_ramp.to_uv", "smoothness"})]:
+        params = mi.traverse(bsdf)
+        assert set(params.keys()) == keys
+        for key in keys - {"diffuse_ramp.to_uv", "specular_ramp.to_uv"}:   # the bitmap's own
+            assert not (params.flags(key) & mi.ParamFlags.NonDifferentiable), key
+
+
+def test_update_matches_a_fresh_load(rng):
+    wi, wo = random_hemisphere(rng, 1024, 0.05), random_hemisphere(rng, 1024, 0.05)
+    bsdf = load()
+    params = mi.traverse(bsdf)
+    params["specular_threshold.value"] = 0.6
+    params["smoothness"] = 0.3
+    params["specular_shade.value"] = 0.25
+    params.update()
+    fresh = load(specular_threshold=0.6, smoothness=0.3, specular_shade=0.25)
+    np.testing.assert_allclose(evaluate(bsdf, wi, wo)[0], evaluate(fresh, wi, wo)[0], rtol=1e-6)
+    np.testing.assert_allclose(evaluate(bsdf, wi, wo)[1], evaluate(fresh, wi, wo)[1], rtol=1e-6)
+
+
+GRAD_CONFIG = {"diffuse_reflectance": 0.7, "diffuse_shade": 0.25, "diffuse_threshold": 0.4,
+               "specular_reflectance": 0.9, "specular_shade": 0.1, "specular_threshold": 0.6,
+               "smoothness": 0.3}
+
+
+@pytest.mark.parametrize("model", MODELS)
+@pytest.mark.parametrize("key", sorted(STEP_KEYS))
+def test_gradient_matches_finite_differences(rng, model, key):
+    config = {**GRAD_CONFIG, "specular_model": model}
+    wi, wo = random_hemisphere(rng, 2048, 0.05), random_hemisphere(rng, 2048, 0.05)
+    bsdf = load(**config)
+    params = mi.traverse(bsdf)
+    dr.enable_grad(params[key])
+    params.update()
+    dr.backward(dr.sum(dr.sum(bsdf.eval(mi.BSDFContext(), surface(wi), vec(wo)))))
+    grad = float(dr.sum(dr.grad(params[key]))[0])
+    name, h = key.split(".")[0], 1e-3
+
+    def total(x):
+        return float(evaluate(load(**{**config, name: x}), wi, wo)[0].astype(np.float64).sum())
+
+    fd = (total(config[name] + h) - total(config[name] - h)) / (2 * h)
+    assert abs(grad) > 1.0
+    np.testing.assert_allclose(grad, fd, rtol=1e-2)

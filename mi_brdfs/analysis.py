@@ -78,3 +78,35 @@ def polar_lobes(ax, bsdf, angles=(0, 30, 60, 80), title: str = "") -> None:
     ax.set_thetamax(90)
     if title:
         ax.set_title(title, fontsize=9)
+
+
+def sphere_scene(bsdf: dict, res: int = 128, integrator: dict | None = None,
+                 light=(2.0, 2.5, 3.0), intensity: float = 12.0, env: float = 0.0) -> dict:
+    """A unit sphere seen from +z, lit by one point light (and an optional
+    constant environment): the scene the notebooks use to show a BSDF."""
+    import mitsuba as mi
+    T = mi.ScalarTransform4f
+    mode = bsdf.get("mode", "hdr")
+    d = {
+        "type": "scene",
+        "integrator": integrator or ({"type": "scanline"} if mode == "scanline"
+                                     else {"type": "path", "max_depth": 2}),
+        "sensor": {"type": "perspective", "fov": 32,
+                   "to_world": T().look_at(origin=[0, 0, 4], target=[0, 0, 0], up=[0, 1, 0]),
+                   "film": {"type": "hdrfilm", "width": res, "height": res,
+                            "rfilter": {"type": "box"}},
+                   "sampler": {"type": "independent"}},
+        "sphere": {"type": "sphere", "bsdf": bsdf},
+        "light": {"type": "point", "position": list(light),
+                  "intensity": {"type": "rgb", "value": intensity}},
+    }
+    if env > 0:
+        d["env"] = {"type": "constant", "radiance": {"type": "rgb", "value": env}}
+    return d
+
+
+def render_sphere(bsdf: dict, res: int = 128, spp: int = 16, **scene_options) -> np.ndarray:
+    """Render sphere_scene(bsdf) and return the linear RGB image (H, W, 3)."""
+    import mitsuba as mi
+    scene = mi.load_dict(sphere_scene(bsdf, res, **scene_options))
+    return np.array(mi.render(scene, spp=spp))[..., :3]

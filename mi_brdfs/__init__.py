@@ -14,16 +14,19 @@ _llvm.check()
 
 from . import integrator, plugin   # noqa: E402
 from .cook_torrance import CookTorrance   # noqa: E402
+from .blinn import Blinn                  # noqa: E402
 from .lambert import Lambert              # noqa: E402
 from .oren_nayar import OrenNayar         # noqa: E402
+from .phong import Phong                  # noqa: E402
 from .toon import Toon                    # noqa: E402
 from .ward import Ward                    # noqa: E402
 
-PLUGINS = (Lambert, OrenNayar, Toon, CookTorrance, Ward)
+# In the lecture's order: diffuse models, then specular ones.
+PLUGINS = (Lambert, OrenNayar, Toon, Phong, Blinn, Ward, CookTorrance)
 DEFAULT_VARIANT = "llvm_ad_rgb"
 
-__all__ = ["register", "PLUGINS", "DEFAULT_VARIANT", "Lambert", "OrenNayar", "Toon",
-           "CookTorrance", "Ward"]
+__all__ = ["register", "PLUGINS", "DEFAULT_VARIANT", "Lambert", "OrenNayar", "Toon", "Phong",
+           "Blinn", "Ward", "CookTorrance"]
 
 
 def register() -> str:

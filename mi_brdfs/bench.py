@@ -212,7 +212,7 @@ def group_models(s: Settings, refs) -> list[dict]:
 
     from . import catalog
     rows = []
-    for name, config in catalog.BENCH_MODELS:
+    for name, config in catalog.bench_models():
         t = timed(mi.load_dict(scene_dict(config, s.res)), s.spp, s.repeats)
         rows.append({"name": name, "median_s": t["median_s"], "per_spp_s": t["median_s"] / s.spp,
                      "compile_s": t["compile_s"]})

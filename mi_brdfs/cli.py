@@ -106,7 +106,9 @@ def cmd_render(args) -> int:
             raise CLIError(f"variant {args.variant!r} is not available: {error}") from None
         mi_brdfs.register()
 
-    scene = mi.load_file(args.scene, **defines)
+    # parallel=False: scene loading with Python plugins in worker threads failed
+    # intermittently here (bad_alloc, basic_string::_M_create); serial loading is cheap.
+    scene = mi.load_file(args.scene, parallel=False, **defines)
     spp = args.spp or scene_spp(scene)
     start = time.perf_counter()
     image = render_passes(scene, spp, args.passes, args.seed,

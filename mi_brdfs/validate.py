@@ -188,6 +188,10 @@ def rendered_albedo(config: dict, angles, size: Size) -> np.ndarray:
                                 "rfilter": {"type": "box"}},
                        "sampler": {"type": "independent"}},
             "plane": {"type": "rectangle", "bsdf": config, "to_world": T().scale(1000.0)},
+            # A black floor just below: light from below the surface (which the
+            # toon model's dark side would see) is not part of the albedo.
+            "floor": {"type": "rectangle", "bsdf": {"type": "diffuse", "reflectance": 0.0},
+                      "to_world": T().translate([0, 0, -1e-2]) @ T().scale(1000.0)},
             "env": {"type": "constant", "radiance": {"type": "rgb", "value": 1.0}},
         })
         image = np.array(mi.render(scene, spp=size.furnace_spp))[..., :3]

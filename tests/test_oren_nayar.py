@@ -13,10 +13,7 @@ import drjit as dr
 import mitsuba as mi
 
 from conftest import evaluate, random_hemisphere, surface, vec
-from mi_brdfs.oren_nayar import OrenNayar
-from mi_brdfs.plugin import register_plugin
 
-register_plugin(OrenNayar)          # not yet in mi_brdfs.PLUGINS
 
 HALF_PI = 0.5 * math.pi
 METHODS = ["exact", "table"]

@@ -7,7 +7,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import mitsuba as mi
 
 from mi_brdfs import cli, exr
 

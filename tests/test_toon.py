@@ -1,7 +1,6 @@
 """toon: the lecture's stepped colours (NumPy) in both modes, smooth bands and
 ramps, the dark side for lights behind, the white-furnace report, sampling,
 extremes, errors and differentiability."""
-import itertools
 import math
 import re
 
@@ -12,10 +11,7 @@ import drjit as dr
 import mitsuba as mi
 
 from conftest import evaluate, random_hemisphere, surface, vec
-from mi_brdfs.plugin import register_plugin
-from mi_brdfs.toon import Toon
 
-register_plugin(Toon)               # not yet in mi_brdfs.PLUGINS
 
 MODELS = ["phong", "blinn"]
 

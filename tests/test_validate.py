@@ -7,7 +7,6 @@ import sys
 
 import pytest
 
-from mi_brdfs import validate
 
 
 @pytest.fixture(scope="module")
@@ -39,6 +38,9 @@ def test_furnace_flags(report):
     assert abs(hdr["max"] - 1) < 0.01 and abs(hdr["min"] - 1) < 0.01 and not hdr["exceeds_1"]
     scan = furnace_row(r, "lambert", "scanline")
     assert scan["exceeds_1"] and scan["max"] == pytest.approx(3.1416, rel=0.01)   # no 1/pi
+    phong = furnace_row(r, "phong", "scanline")               # m_S = 1, gamma = 1
+    assert phong["config"].startswith("m_D = 0, m_S = 1, gamma = 1") and phong["exceeds_1"]
+    assert not furnace_row(r, "phong", "hdr")["exceeds_1"]
     ggx = furnace_row(r, "cook_torrance", "hdr")
     assert ggx["loses_energy"] and ggx["max"] < 0.65
     for row in r["furnace"]:               # rendering and quadrature agree

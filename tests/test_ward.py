@@ -10,10 +10,7 @@ from conftest import evaluate, random_hemisphere, surface, vec
 import drjit as dr
 import mitsuba as mi
 
-from mi_brdfs.plugin import register_plugin
-from mi_brdfs.ward import Ward
 
-register_plugin(Ward)
 
 
 def rgb(c):

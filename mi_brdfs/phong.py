@@ -1,0 +1,194 @@
+"""
+``phong`` — Lambert diffuse + Phong specular reflection
+=======================================================
+
+.. list-table::
+   :header-rows: 1
+
+   * - Parameter
+     - Type
+     - Description
+     - Default
+   * - ``diffuse_reflectance``
+     - float, rgb or texture (∂)
+     - m_D, the diffuse colour, >= 0 (above 1 allowed: scanline mode clamps).
+     - 0.5
+   * - ``specular_reflectance``
+     - float, rgb or texture (∂)
+     - m_S, the specular colour, >= 0. With the default m_D + m_S = 1 the hdr
+       model reflects at most all the light it receives.
+     - 0.5
+   * - ``exponent``
+     - float or texture in [0, 1e8] (∂)
+     - gamma, the specular power: the larger, the smaller and sharper the
+       highlight (the lecture: "one or two hundreds" in practice). gamma = 0 is a
+       uniform lobe over the hemisphere about the mirror direction. The lobe
+       is evaluated and sampled to ~1e-6 at any gamma (:mod:`mi_brdfs.powercos`);
+       the bound ``MAX_EXPONENT`` = 1e8 (a lobe 1e-4 rad wide) keeps it well
+       above the spacing of float32 directions (~1e-7).
+     - 100
+   * - ``mode``
+     - string
+     - ``"hdr"`` (radiometric, unclamped) or ``"scanline"`` (the lecture's formula).
+     - ``"hdr"``
+
+With w_r the viewer (``si.wi``), d the light (``wo``), n the normal and the
+light's mirror direction r = 2 (d·n) n - d, cos(alpha) = w_r·r, ``eval`` returns::
+
+    scanline:  clamp01(m_D · clamp(d·n)) + clamp01(m_S · clamp(w_r·r)^gamma)
+    hdr:       (m_D / pi + m_S · (gamma + 2) / (2 pi) · clamp(w_r·r)^gamma) · (d·n)
+
+The scanline form is the lecture's, each lobe clamped per colour channel to
+[0, 1]; like the lecture's Phong term it does not carry clamp(d·n). The hdr
+form is the energy-normalised *modified* Phong BRDF (Lewis 1994; Lafortune and
+Willems 1994): at normal incidence r = n and alpha = theta_o, so the specular
+albedo is m_S (gamma+2)/(2 pi) · integral cos^gamma(theta) cos(theta) dw = m_S
+exactly, and it only decreases towards grazing incidence (the lobe tilts away
+from the normal and the horizon cuts it; about m_S cos(theta_i) for narrow
+lobes, measured by the furnace test in tests/test_phong.py): with
+m_D + m_S <= 1 the surface never reflects more than it receives. w_r·r = d·r' (r' the viewer's mirror
+direction) is symmetric in d and w_r, so the hdr BRDF is reciprocal.
+
+clamp(w_r·r)^gamma is 0 wherever w_r·r <= 0, also for gamma = 0 (0^0 := 0, the
+limit gamma -> 0+: the lobe is the hemisphere of light directions about r',
+as the lecture's "zero when the angle is greater than 90°"; its hdr albedo is
+m_S (1 + cos(theta_i))/2). It is evaluated without float32
+cancellation for any gamma (:mod:`mi_brdfs.powercos`).
+
+Sampling: cosine hemisphere for the diffuse lobe; for the specular lobe the
+density (gamma + 1)/(2 pi) cos^gamma(alpha) about the viewer's mirror direction
+r' = 2 (w_r·n) n - w_r. Samples below the surface are discarded (that part of
+the lobe is lost, so the pdf over the hemisphere is the lobe density itself,
+integrating to less than 1). The specular lobe is picked in proportion to its
+albedo at normal incidence against the diffuse one: m_S vs m_D in hdr mode,
+2 m_S/(gamma + 1) vs m_D in scanline mode (channel means). With m_D = 0 there
+is no diffuse lobe, with m_S = 0 no specular one.
+
+.. code-block:: xml
+
+    <bsdf type="phong">
+        <rgb name="diffuse_reflectance" value="0.6, 0.1, 0.1"/>
+        <rgb name="specular_reflectance" value="0.4, 0.4, 0.4"/>
+        <float name="exponent" value="200"/>
+        <string name="mode" value="scanline"/>
+    </bsdf>
+"""
+from __future__ import annotations
+
+import drjit as dr
+import mitsuba as mi
+
+from . import powercos
+from .plugin import BRDF, Reader, is_zero, mean
+
+MAX_EXPONENT = 1e8     # lobe ~1e-4 rad wide, still 1000x the float32 direction spacing
+
+
+# ----------------------------------------------------------------------------
+#  The formulas (local directions: wi = w_r the viewer, wo = d the light)
+# ----------------------------------------------------------------------------
+
+def mirror(v):
+    """2 (v·n) n - v in the local frame (n = +z): exact in floating point."""
+    return mi.Vector3f(-v.x, -v.y, v.z)
+
+
+def cos_alpha(wi, wo):
+    """(cos alpha, 1 - cos alpha) with cos alpha = w_r·r = d·r', r and r' the
+    mirror directions of d and w_r (1 - cos alpha accurate near the highlight)."""
+    return powercos.cos_versin(wo, mirror(wi))
+
+
+def specular_scanline(wi, wo, gamma):
+    """The lecture's clamp(w_r·r)^gamma."""
+    cos_a, versin_a = cos_alpha(wi, wo)
+    return powercos.pow_cos(cos_a, versin_a, gamma)
+
+
+def specular_hdr(wi, wo, gamma):
+    """(gamma + 2)/(2 pi) · clamp(w_r·r)^gamma · cos(theta_o): the normalised lobe."""
+    cos_o = dr.fmax(mi.Frame3f.cos_theta(wo), 0.0)
+    return (gamma + 2.0) * dr.inv_two_pi * specular_scanline(wi, wo, gamma) * cos_o
+
+
+def diffuse(m_d, cos_o, mode: str):
+    """m_D·clamp(d·n) (scanline) or m_D/pi·cos(theta_o) (hdr)."""
+    scale = 1.0 if mode == "scanline" else dr.inv_pi
+    return m_d * scale * dr.fmax(cos_o, 0.0)
+
+
+def specular_weight(gamma, mode: str):
+    """The specular lobe's albedo at normal incidence per unit m_S, relative to a
+    diffuse lobe's (1 per unit m_D): 1 in hdr mode, 2/(gamma+1) in scanline mode
+    (integral of cos^gamma over the hemisphere, 2 pi/(gamma+1), over pi)."""
+    return 1.0 if mode == "hdr" else 2.0 / (gamma + 1.0)
+
+
+def sample_lobe(wi, sample2, gamma):
+    """A light direction with density (gamma+1)/(2 pi) cos^gamma(alpha) about r'."""
+    return mi.Frame3f(mirror(wi)).to_world(powercos.sample(sample2, gamma))
+
+
+def pdf_lobe(wi, wo, gamma):
+    """Density of sample_lobe() at wo (per solid angle)."""
+    cos_a, versin_a = cos_alpha(wi, wo)
+    return powercos.pdf(cos_a, versin_a, gamma)
+
+
+# ----------------------------------------------------------------------------
+#  The plugin
+# ----------------------------------------------------------------------------
+
+class Phong(BRDF):
+    name = "phong"
+
+    def read(self, reader: Reader) -> None:
+        self.m_diffuse = reader.texture("diffuse_reflectance", 0.5)               # m_D
+        self.m_specular = reader.texture("specular_reflectance", 0.5)             # m_S
+        self.m_exponent = reader.texture("exponent", 100.0, 0.0, MAX_EXPONENT)    # gamma
+
+    def traverse(self, cb):
+        flags = mi.ParamFlags.Differentiable
+        cb.put("diffuse_reflectance", self.m_diffuse, flags)
+        cb.put("specular_reflectance", self.m_specular, flags)
+        cb.put("exponent", self.m_exponent, flags)
+
+    # --- lobes ---------------------------------------------------------------
+    def has_diffuse(self) -> bool:
+        return not is_zero(self.m_diffuse)
+
+    def has_specular(self) -> bool:
+        return not is_zero(self.m_specular)
+
+    def gamma(self, si, active):
+        return self.m_exponent.eval_1(si, active)
+
+    def lobes(self, si, wo, active):
+        f_d = mi.Spectrum(0.0)
+        f_s = mi.Spectrum(0.0)
+        if self.diffuse:
+            m_d = self.m_diffuse.eval(si, active)
+            f_d = diffuse(m_d, mi.Frame3f.cos_theta(wo), self.mode)
+        if self.specular:
+            m_s = self.m_specular.eval(si, active)
+            spec = specular_scanline if self.mode == "scanline" else specular_hdr
+            f_s = m_s * spec(si.wi, wo, self.gamma(si, active))
+        return f_d, f_s
+
+    def selection_weights(self, si, active):
+        w_d = mean(self.m_diffuse.eval(si, active))
+        w_s = mean(self.m_specular.eval(si, active)) \
+            * specular_weight(self.gamma(si, active), self.mode)
+        return w_d, w_s
+
+    # --- specular sampling ----------------------------------------------------
+    def sample_specular(self, si, sample2, active):
+        return sample_lobe(si.wi, sample2, self.gamma(si, active))
+
+    def pdf_specular(self, si, wo, active):
+        return pdf_lobe(si.wi, wo, self.gamma(si, active))
+
+    def describe(self) -> dict:
+        return {"exponent": self.m_exponent,
+                "diffuse_reflectance": self.m_diffuse,
+                "specular_reflectance": self.m_specular}

@@ -81,6 +81,21 @@ def cook_torrance_scanline(d, w):
     return np.where(ok[:, None], np.nan_to_num(v), 0.0)
 
 
+M_S, GAMMA = 0.8, 30.0
+
+
+def phong_scanline(d, w):
+    """The lecture: clamp01(m_D·clamp(d·n)) + clamp01(m_S·clamp(w·r)^gamma), r = 2(d·n)n - d."""
+    n = np.array([0.0, 0.0, 1.0])
+    dn = d @ n
+    r = 2 * dn[:, None] * n - d
+    spec = M_S * np.clip(np.sum(w * r, axis=1), 0, 1) ** GAMMA
+    value = (np.clip(M_D[None, :] * np.clip(dn, 0, 1)[:, None], 0, 1)
+             + np.clip(spec, 0, 1)[:, None])
+    ok = (d[:, 2] > 0) & (w[:, 2] > 0)
+    return np.where(ok[:, None], value, 0.0)
+
+
 CASES = {
     "lambert": ({"type": "lambert", "mode": "scanline",
                  "reflectance": {"type": "rgb", "value": M_D.tolist()}}, lambert_scanline),
@@ -88,6 +103,9 @@ CASES = {
                        "alpha": 0.3, "distribution": "ggx", "geometry": "smith",
                        "diffuse_reflectance": {"type": "rgb", "value": M_D.tolist()}},
                       cook_torrance_scanline),
+    "phong": ({"type": "phong", "mode": "scanline", "specular_reflectance": M_S,
+               "exponent": GAMMA, "diffuse_reflectance": {"type": "rgb", "value": M_D.tolist()}},
+              phong_scanline),
 }
 
 

@@ -162,17 +162,15 @@ def verdict(m: dict, thresholds: dict[str, float]) -> list[str]:
 # ----------------------------------------------------------------------------
 
 def _save_map(path: str, data: np.ndarray, cmap: str, vmin: float, vmax: float, label: str) -> None:
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure    # no pyplot: no global backend change
 
     h, w = data.shape
-    fig, ax = plt.subplots(figsize=(4.8, 4.8 * h / w + 0.3), dpi=100)
+    fig = Figure(figsize=(4.8, 4.8 * h / w + 0.3), dpi=100)
+    ax = fig.subplots()
     im = ax.imshow(data, cmap=cmap, vmin=vmin, vmax=vmax, interpolation="nearest")
     ax.set_axis_off()
     fig.colorbar(im, ax=ax, fraction=0.046, pad=0.04, label=label)
     fig.savefig(path, bbox_inches="tight")
-    plt.close(fig)
 
 
 def pictures(directory: str, prefix: str, ref: np.ndarray, test: np.ndarray,

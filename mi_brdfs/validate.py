@@ -200,15 +200,14 @@ def rendered_albedo(config: dict, angles, size: Size) -> np.ndarray:
 
 
 def furnace_section(size: Size, out: str, models: dict) -> list[dict]:
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure    # no pyplot: no global backend change
     import mitsuba as mi
 
     rows = []
     for name, configs in models.items():
         for label, base in configs:
-            fig, ax = plt.subplots(figsize=(5, 3.4), dpi=90)
+            fig = Figure(figsize=(5, 3.4), dpi=90)
+            ax = fig.subplots()
             for mode, colour in zip(MODES, ("C0", "C3")):
                 config = {**base, "mode": mode}
                 quad = analysis.directional_albedo(mi.load_dict(config), size.angles, size.quad)
@@ -234,7 +233,6 @@ def furnace_section(size: Size, out: str, models: dict) -> list[dict]:
             fig.tight_layout()
             rows[-1]["plot"] = rows[-2]["plot"] = f"furnace_{name}_{len(rows)}.png"
             fig.savefig(os.path.join(out, rows[-1]["plot"]))
-            plt.close(fig)
     return rows
 
 
@@ -279,14 +277,13 @@ def sampling_section(size: Size, models: dict) -> list[dict]:
 # ----------------------------------------------------------------------------
 
 def lobe_section(out: str, models: dict, angles=(0, 30, 60, 80)) -> list[dict]:
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure    # no pyplot: no global backend change
     import mitsuba as mi
 
     rows = []
     for name, base in models.items():
-        fig, axes = plt.subplots(1, 2, subplot_kw={"projection": "polar"}, figsize=(8, 3.6), dpi=90)
+        fig = Figure(figsize=(8, 3.6), dpi=90)
+        axes = fig.subplots(1, 2, subplot_kw={"projection": "polar"})
         for ax, mode in zip(axes, MODES):
             analysis.polar_lobes(ax, mi.load_dict({**base, "mode": mode}), angles,
                                  f"{name} ({mode})")
@@ -294,7 +291,6 @@ def lobe_section(out: str, models: dict, angles=(0, 30, 60, 80)) -> list[dict]:
         fig.tight_layout()
         file = f"lobe_{name}.png"
         fig.savefig(os.path.join(out, file))
-        plt.close(fig)
         rows.append({"model": name, "plot": file})
     return rows
 

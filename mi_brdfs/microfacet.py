@@ -19,7 +19,8 @@ gradients): degenerate denominators are kept away from zero by ``TINY``.
 from __future__ import annotations
 
 import drjit as dr
-import mitsuba as mi
+
+from . import powercos
 
 ALPHA_MIN = 1e-4      # smallest roughness used (alpha = 0 is clamped here, as Mitsuba does)
 TINY = 1e-18          # keeps squared cosines away from 0 (TINY² is still a normal float32)
@@ -46,10 +47,11 @@ def _cos2_sin2(v):
 
 
 def d_blinn(m, alpha):
+    # cos^e with e = 2/rho² - 2, through powercos: at small rho the exponent is
+    # huge (2e8 at ALPHA_MIN) and cos(theta_m) must not be rounded to 1 first.
+    cos_t, versin = powercos.cos_versin_z(m)
     e = 2.0 / dr.square(alpha) - 2.0                     # the Blinn exponent
-    c = dr.fmax(m.z, TINY)
-    d = dr.power(c, e) / (dr.pi * dr.square(alpha))
-    return dr.select(m.z > 0, d, 0.0)
+    return powercos.pow_cos(cos_t, versin, e) / (dr.pi * dr.square(alpha))
 
 
 def d_beckmann(m, alpha):
@@ -119,16 +121,12 @@ def g_smith(distribution, wi, wo, alpha):
 # ----------------------------------------------------------------------------
 
 def sample_blinn(sample2, alpha):
-    """A microfacet normal with density D_blinn(m) cos(theta_m).
-
-    The cdf of cos(theta_m) is c^(e+2) with e + 2 = 2/rho², so c = u^(rho²/2).
-    """
-    cos_t = dr.power(dr.fmax(sample2.x, TINY), 0.5 * dr.square(alpha))
-    sin_t = dr.sqrt(dr.fmax(1.0 - dr.square(cos_t), 0.0))
-    s, c = dr.sincos(2.0 * dr.pi * sample2.y)
-    return mi.Vector3f(c * sin_t, s * sin_t, cos_t)
+    """A microfacet normal with density D_blinn(m) cos(theta_m), which is the
+    power-cosine lobe of exponent 2/rho² - 1 about the normal."""
+    return powercos.sample(sample2, 2.0 / dr.square(alpha) - 1.0)
 
 
 def pdf_blinn(m, alpha):
     """Density of sample_blinn() over microfacet normals."""
-    return d_blinn(m, alpha) * dr.fmax(m.z, 0.0)
+    cos_t, versin = powercos.cos_versin_z(m)
+    return powercos.pdf(cos_t, versin, 2.0 / dr.square(alpha) - 1.0)

@@ -88,7 +88,7 @@ from __future__ import annotations
 import drjit as dr
 import mitsuba as mi
 
-from . import microfacet as mf
+from . import lambert, microfacet as mf
 from .plugin import BRDF, Reader, is_zero, mean
 
 
@@ -112,12 +112,6 @@ def specular(wi, wo, alpha, f0, distribution: str, geometry: str):
     else:
         g = mf.g_cook_torrance(cos_h, cos_i, cos_o, i_dot_h)
     return d * f * g / (4.0 * dr.fmax(cos_i, mf.TINY))
-
-
-def diffuse(m_d, cos_o, mode: str):
-    """m_D·clamp(d·n) (scanline) or m_D/pi·cos(theta_o) (hdr)."""
-    scale = 1.0 if mode == "scanline" else dr.inv_pi
-    return m_d * scale * dr.fmax(cos_o, 0.0)
 
 
 # ----------------------------------------------------------------------------
@@ -170,7 +164,7 @@ class CookTorrance(BRDF):
         f_s = mi.Spectrum(0.0)
         if self.diffuse:
             m_d = self.m_diffuse.eval(si, active)
-            f_d = diffuse(m_d, mi.Frame3f.cos_theta(wo), self.mode)
+            f_d = lambert.f(m_d, mi.Frame3f.cos_theta(wo), self.mode)
         if self.specular:
             m_s = self.m_specular.eval(si, active)
             f_s = m_s * specular(si.wi, wo, self.alpha(si, active), self.m_f0,

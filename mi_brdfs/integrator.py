@@ -57,6 +57,8 @@ from __future__ import annotations
 import drjit as dr
 import mitsuba as mi
 
+from .plugin import bind
+
 
 class Scanline:
     name = "scanline"
@@ -109,15 +111,8 @@ def make_hdr(props: mi.Properties):
     return mi.load_dict(config)
 
 
-_bound: dict[str, type] = {}
-
-
 def register() -> None:
     """Register ``scanline`` and ``hdr`` for the active variant."""
-    variant = mi.variant()
-    if variant not in _bound:
-        body = {k: v for k, v in vars(Scanline).items() if k not in ("__dict__", "__weakref__")}
-        _bound[variant] = type("Scanline", (mi.SamplingIntegrator,), body)
-    cls = _bound[variant]
+    cls = bind(Scanline, "SamplingIntegrator")
     mi.register_integrator("scanline", lambda props: cls(props))
     mi.register_integrator("hdr", make_hdr)

@@ -47,12 +47,12 @@ from .plugin import BRDF, Reader, is_zero
 #  The formulas (cos_o = d·n, the light's cosine)
 # ----------------------------------------------------------------------------
 
-def f_scanline(m_d, cos_o):
-    return m_d * dr.fmax(cos_o, 0.0)
-
-
-def f_hdr(m_d, cos_o):
-    return m_d * dr.inv_pi * dr.fmax(cos_o, 0.0)
+def f(m_d, cos_o, mode: str):
+    """The Lambert lobe in eval convention: m_D·clamp(d·n) (scanline, the
+    lecture's f_r) or m_D/pi·cos(theta_o) (hdr). Also the diffuse lobe of
+    phong, blinn, ward and cook_torrance."""
+    scale = 1.0 if mode == "scanline" else dr.inv_pi
+    return m_d * scale * dr.fmax(cos_o, 0.0)
 
 
 # ----------------------------------------------------------------------------
@@ -73,9 +73,7 @@ class Lambert(BRDF):
 
     def lobes(self, si, wo, active):
         m_d = self.m_reflectance.eval(si, active)
-        cos_o = mi.Frame3f.cos_theta(wo)
-        f = f_scanline if self.mode == "scanline" else f_hdr
-        return f(m_d, cos_o), mi.Spectrum(0.0)
+        return f(m_d, mi.Frame3f.cos_theta(wo), self.mode), mi.Spectrum(0.0)
 
     def describe(self) -> dict:
         return {"reflectance": self.m_reflectance}

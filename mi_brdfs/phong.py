@@ -78,7 +78,7 @@ from __future__ import annotations
 import drjit as dr
 import mitsuba as mi
 
-from . import powercos
+from . import lambert, powercos
 from .plugin import BRDF, Reader, is_zero, mean
 
 MAX_EXPONENT = 1e8     # lobe ~1e-4 rad wide, still 1000x the float32 direction spacing
@@ -109,12 +109,6 @@ def specular_hdr(wi, wo, gamma):
     """(gamma + 2)/(2 pi) · clamp(w_r·r)^gamma · cos(theta_o): the normalised lobe."""
     cos_o = dr.fmax(mi.Frame3f.cos_theta(wo), 0.0)
     return (gamma + 2.0) * dr.inv_two_pi * specular_scanline(wi, wo, gamma) * cos_o
-
-
-def diffuse(m_d, cos_o, mode: str):
-    """m_D·clamp(d·n) (scanline) or m_D/pi·cos(theta_o) (hdr)."""
-    scale = 1.0 if mode == "scanline" else dr.inv_pi
-    return m_d * scale * dr.fmax(cos_o, 0.0)
 
 
 def specular_weight(gamma, mode: str):
@@ -168,7 +162,7 @@ class Phong(BRDF):
         f_s = mi.Spectrum(0.0)
         if self.diffuse:
             m_d = self.m_diffuse.eval(si, active)
-            f_d = diffuse(m_d, mi.Frame3f.cos_theta(wo), self.mode)
+            f_d = lambert.f(m_d, mi.Frame3f.cos_theta(wo), self.mode)
         if self.specular:
             m_s = self.m_specular.eval(si, active)
             spec = specular_scanline if self.mode == "scanline" else specular_hdr

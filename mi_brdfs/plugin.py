@@ -317,15 +317,15 @@ class BRDF:
 _bound: dict[tuple[str, type], type] = {}
 
 
-def bind(cls: type) -> type:
-    """The class ``cls`` rebuilt on top of the active variant's ``mi.BSDF``.
+def bind(cls: type, root: str = "BSDF") -> type:
+    """The class ``cls`` rebuilt on top of the active variant's ``mi.<root>``.
 
-    Mitsuba's ``mi.BSDF`` differs per variant and nanobind allows a single base,
-    so each plain-Python class of the hierarchy is re-created per variant.
+    Mitsuba's classes differ per variant and nanobind allows a single base, so
+    each plain-Python class of the hierarchy is re-created per variant.
     """
     key = (mi.variant(), cls)
     if key not in _bound:
-        base = mi.BSDF if cls.__base__ is object else bind(cls.__base__)
+        base = getattr(mi, root) if cls.__base__ is object else bind(cls.__base__, root)
         body = {k: v for k, v in vars(cls).items() if k not in ("__dict__", "__weakref__")}
         _bound[key] = type(cls.__name__, (base,), body)
     return _bound[key]

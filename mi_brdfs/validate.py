@@ -370,7 +370,7 @@ def validate(out_dir: str, quick: bool = False, log=print) -> dict:
     import mi_brdfs  # noqa: F401  (plugins registered)
 
     size = QUICK if quick else FULL
-    furnace = catalog.quick(catalog.FURNACE) if quick else catalog.FURNACE
+    furnace = catalog.quick(catalog.FURNACE, 2) if quick else catalog.FURNACE
     chi2 = catalog.quick(catalog.CHI2, 2) if quick else catalog.CHI2
     parent = os.path.dirname(os.path.abspath(out_dir))
     if not os.path.isdir(parent):

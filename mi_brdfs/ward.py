@@ -108,6 +108,7 @@ from __future__ import annotations
 import drjit as dr
 import mitsuba as mi
 
+from . import lambert
 from .plugin import BRDF, Reader, is_zero, mean
 
 ALPHA_MIN = 1e-4      # smallest roughness used (0 is clamped here)
@@ -178,12 +179,6 @@ def specular_angles(wi, wo, alpha_t, alpha_b):
 
 
 SPECULAR = {"vectors": specular_vectors, "angles": specular_angles}
-
-
-def diffuse(m_d, cos_o, mode: str):
-    """m_D·clamp(d·n) (scanline) or m_D/pi·cos(theta_o) (hdr)."""
-    scale = 1.0 if mode == "scanline" else dr.inv_pi
-    return m_d * scale * dr.fmax(cos_o, 0.0)
 
 
 # ----------------------------------------------------------------------------
@@ -272,7 +267,7 @@ class Ward(BRDF):
         f_s = mi.Spectrum(0.0)
         if self.diffuse:
             m_d = self.m_diffuse.eval(si, active)
-            f_d = diffuse(m_d, mi.Frame3f.cos_theta(wo), self.mode)
+            f_d = lambert.f(m_d, mi.Frame3f.cos_theta(wo), self.mode)
         if self.specular:
             m_s = self.m_specular.eval(si, active)
             f_s = m_s * SPECULAR[self.formula](si.wi, wo, *self.alphas(si, active))

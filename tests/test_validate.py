@@ -41,6 +41,9 @@ def test_furnace_flags(report):
     phong = furnace_row(r, "phong", "scanline")               # m_S = 1, gamma = 1
     assert phong["config"].startswith("m_D = 0, m_S = 1, gamma = 1") and phong["exceeds_1"]
     assert not furnace_row(r, "phong", "hdr")["exceeds_1"]
+    blinn_smith = next(f for f in r["furnace"] if f["model"] == "cook_torrance" and
+                       f["config"].startswith("Blinn D, Smith") and f["mode"] == "hdr")
+    assert blinn_smith["exceeds_1"] and blinn_smith["max_at"] >= 80     # near grazing
     ggx = furnace_row(r, "cook_torrance", "hdr")
     assert ggx["loses_energy"] and ggx["max"] < 0.65
     for row in r["furnace"]:               # rendering and quadrature agree

@@ -22,6 +22,8 @@ integrators  scan-line direct lighting, Mitsuba's ``direct``, ``path`` with max
              depth 2, 3 and 8, against a converged path-traced reference.
 convergence  error vs spp (log-log) and its slope (about -1 for relMSE).
 scaling      render time vs resolution and vs number of lights (scan-line).
+lobes        model only what the scene requires: a plugin with a lobe switched
+             off renders at the cost of the model without that lobe.
 
 Outputs in OUT_DIR: results.json, results.csv, README.md (tables) and plots.
 """
@@ -39,7 +41,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-GROUPS = ("builtin", "models", "oren_nayar", "sampling", "integrators", "convergence", "scaling")
+GROUPS = ("builtin", "models", "oren_nayar", "sampling", "integrators", "convergence", "scaling",
+          "lobes")
 
 
 @dataclass
@@ -66,6 +69,17 @@ def efficiency(relmse: float, seconds: float) -> float:
     if relmse <= 0:
         return math.inf
     return 1.0 / (relmse * seconds)
+
+
+def pareto(points: list[tuple[float, float]]) -> list[bool]:
+    """For (time, error) points: True where no other point is at least as fast
+    and as accurate and strictly better in one of the two."""
+    front = []
+    for i, (t, e) in enumerate(points):
+        dominated = any(t2 <= t and e2 <= e and (t2 < t or e2 < e)
+                        for j, (t2, e2) in enumerate(points) if j != i)
+        front.append(not dominated)
+    return front
 
 
 def relmse(test: np.ndarray, ref: np.ndarray) -> float:
@@ -321,9 +335,37 @@ def group_scaling(s: Settings, refs) -> list[dict]:
     return rows
 
 
+LOBES_OFF = [
+    ("cook_torrance k=1 vs lambert",
+     {"type": "cook_torrance", "k": 1.0, "diffuse_reflectance": 0.6},
+     {"type": "lambert", "reflectance": 0.6}),
+    ("phong m_S=0 vs lambert",
+     {"type": "phong", "specular_reflectance": 0.0, "diffuse_reflectance": 0.6},
+     {"type": "lambert", "reflectance": 0.6}),
+    ("ward m_D=0 vs ward m_D=0.5",
+     {"type": "ward", "diffuse_reflectance": 0.0, "alpha_u": 0.1, "alpha_v": 0.3},
+     {"type": "ward", "diffuse_reflectance": 0.5, "alpha_u": 0.1, "alpha_v": 0.3}),
+]
+
+
+def group_lobes(s: Settings, refs) -> list[dict]:
+    import mitsuba as mi
+    rows = []
+    for name, off, reference in LOBES_OFF:
+        flags = mi.load_dict(off).flags()
+        t_off = timed(mi.load_dict(scene_dict(off, s.res)), s.spp, s.repeats)
+        t_ref = timed(mi.load_dict(scene_dict(reference, s.res)), s.spp, s.repeats)
+        rows.append({"name": name, "lobe_off_s": t_off["median_s"],
+                     "reference_s": t_ref["median_s"],
+                     "ratio": t_off["median_s"] / t_ref["median_s"],
+                     "diffuse_lobe": bool(flags & mi.BSDFFlags.Diffuse),
+                     "glossy_lobe": bool(flags & mi.BSDFFlags.Glossy)})
+    return rows
+
+
 RUNNERS = {"builtin": group_builtin, "models": group_models, "oren_nayar": group_oren_nayar,
            "sampling": group_sampling, "integrators": group_integrators,
-           "convergence": group_convergence, "scaling": group_scaling}
+           "convergence": group_convergence, "scaling": group_scaling, "lobes": group_lobes}
 
 
 # ----------------------------------------------------------------------------
@@ -384,6 +426,18 @@ def findings(results: dict) -> list[str]:
                        "environment light).")
     if g.get("convergence"):
         out.append(f"Convergence: relMSE vs spp has log-log slope {g['convergence'][0]['slope']:.2f}.")
+    if g.get("scaling"):
+        lights = [r for r in g["scaling"] if r["axis"] == "lights"]
+        if len(lights) > 1:
+            slope = np.polyfit([r["value"] for r in lights], [r["median_s"] for r in lights], 1)[0]
+            out.append(f"Scan-line cost per extra light: {1e3 * slope:.2f} ms "
+                       f"(on {lights[0]['median_s'] * 1e3:.1f} ms for one light).")
+    if g.get("lobes"):
+        ratios = ", ".join(f"{r['name']} {r['ratio']:.3f}" for r in g["lobes"])
+        verdict = ("within 5 %: a lobe that is off is not traced" if
+                   all(r["ratio"] < 1.05 for r in g["lobes"]) else
+                   "above 1.05 somewhere: a dead lobe may still be traced (a bug)")
+        out.append(f"Lobes switched off, time against the model without them: {ratios} ({verdict}).")
     return out
 
 
@@ -457,28 +511,52 @@ def plots(out_dir: str, results: dict) -> dict[str, list[str]]:
             ax.set_xlabel(axis)
             ax.set_ylabel("seconds")
         save(fig, "scaling", "scaling.png")
+    def scatter(group, rows, label, time_key, error_key, title, name):
+        """Error against time, the Pareto front marked."""
+        points = [(r[time_key], max(r[error_key], 1e-12)) for r in rows]
+        front = pareto(points)
+        fig = Figure(figsize=(5, 3.6))
+        ax = fig.subplots()
+        for (t, e), r, on in zip(points, rows, front):
+            ax.semilogy(t, e, "o", color="C3" if on else "C0")
+            ax.annotate(label(r), (t, e), fontsize=6)
+        xs, ys = zip(*sorted(p for p, on in zip(points, front) if on))
+        ax.plot(xs, ys, "-", color="C3", lw=0.8, label="Pareto front")
+        ax.set_xlabel("seconds")
+        ax.set_ylabel(error_key)
+        ax.set_title(title, fontsize=9)
+        ax.legend(fontsize=7)
+        save(fig, group, name)
+
+    def bars(group, rows, key, title, name, ref=1.0):
+        fig = Figure(figsize=(6, 0.35 * len(rows) + 1.2))
+        ax = fig.subplots()
+        ax.barh([r["name"] for r in rows], [r[key] for r in rows])
+        ax.axvline(ref, color="k", lw=0.6)
+        ax.invert_yaxis()
+        ax.tick_params(labelsize=7)
+        ax.set_xlabel(key)
+        ax.set_title(title, fontsize=9)
+        save(fig, group, name)
+
+    if g.get("builtin"):
+        bars("builtin", g["builtin"], "ratio", "plugin time / built-in time (parity: 1)",
+             "builtin.png")
+    if g.get("models"):
+        bars("models", g["models"], "relative_to_lambert", "render time / lambert's", "models.png")
+    if g.get("lobes"):
+        bars("lobes", g["lobes"], "ratio", "lobe switched off / model without it", "lobes.png")
     if g.get("oren_nayar"):
-        rows = [r for r in g["oren_nayar"] if r["table_resolution"]]
-        fig = Figure(figsize=(4.5, 3.2))
-        ax = fig.subplots()
-        ax.loglog([r["median_s"] for r in rows], [max(r["relmse_vs_exact"], 1e-12) for r in rows], "o-")
-        for r in rows:
-            ax.annotate(str(r["table_resolution"]), (r["median_s"], max(r["relmse_vs_exact"], 1e-12)))
-        ax.axvline(g["oren_nayar"][0]["median_s"], color="k", lw=0.6, label="exact")
-        ax.set_xlabel("seconds")
-        ax.set_ylabel("relMSE vs exact")
-        ax.legend()
-        save(fig, "oren_nayar", "oren_nayar.png")
+        scatter("oren_nayar", g["oren_nayar"], lambda r: r["name"], "median_s",
+                "relmse_vs_exact", "Oren-Nayar table vs exact", "oren_nayar.png")
+    if g.get("sampling"):
+        for name in dict.fromkeys(r["name"] for r in g["sampling"]):
+            rows = [r for r in g["sampling"] if r["name"] == name]
+            scatter("sampling", rows, lambda r: r["strategy"], "median_s", "relmse",
+                    f"{name}, {rows[0]['spp']} spp", f"sampling_{len(made.get('sampling', []))}.png")
     if g.get("integrators"):
-        rows = g["integrators"]
-        fig = Figure(figsize=(4.5, 3.2))
-        ax = fig.subplots()
-        for r in rows:
-            ax.loglog(r["median_s"], r["relmse"], "o")
-            ax.annotate(r["name"], (r["median_s"], r["relmse"]), fontsize=7)
-        ax.set_xlabel("seconds")
-        ax.set_ylabel("relMSE vs converged path tracing")
-        save(fig, "integrators", "integrators.png")
+        scatter("integrators", g["integrators"], lambda r: r["name"], "median_s", "relmse",
+                "vs converged path tracing", "integrators.png")
     return made
 
 

@@ -1,8 +1,8 @@
 # %% [markdown]
 # # Speed against accuracy
 #
-# The numbers come from `mi-brdfs bench` (committed in `docs/bench/`, from one
-# run on one machine; re-run with `mi-brdfs bench -o docs/bench`). Set
+# The numbers come from `mi-brdfs bench` (committed in `docs/benchmarks/`, from one
+# run on one machine; re-run with `mi-brdfs bench -o docs/benchmarks`). Set
 # `MI_BRDFS_RERUN_BENCH=1` to run a quick bench here instead.
 
 # %%
@@ -16,7 +16,7 @@ import matplotlib.pyplot as plt
 
 from mi_brdfs import bench
 
-committed = Path("..") / "docs" / "bench" / "results.json"
+committed = Path("..") / "docs" / "benchmarks" / "results.json"
 if os.environ.get("MI_BRDFS_RERUN_BENCH") == "1" or not committed.exists():
     results = bench.run(tempfile.mkdtemp(), quick=True, log=lambda *a: None)
 else:

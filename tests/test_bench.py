@@ -83,3 +83,19 @@ def test_relations(results):
     assert g["convergence"][0]["slope"] < -0.5                 # error falls with spp
     tables = [o for o in g["oren_nayar"] if o["table_resolution"]]
     assert tables[-1]["relmse_vs_exact"] <= tables[0]["relmse_vs_exact"]   # finer table, less error
+
+
+def test_pareto_by_hand():
+    # (time, error): b is dominated by a (slower and worse); c and d trade off; e duplicates a.
+    points = [(1.0, 0.1), (2.0, 0.2), (0.5, 0.5), (3.0, 0.01), (1.0, 0.1)]
+    assert bench.pareto(points) == [True, False, True, True, True]
+
+
+def test_dead_lobes_are_not_traced(results):
+    _, r, _ = results
+    rows = {row["name"]: row for row in r["groups"]["lobes"]}
+    assert rows["cook_torrance k=1 vs lambert"]["diffuse_lobe"]
+    assert not rows["cook_torrance k=1 vs lambert"]["glossy_lobe"]
+    assert not rows["phong m_S=0 vs lambert"]["glossy_lobe"]
+    assert not rows["ward m_D=0 vs ward m_D=0.5"]["diffuse_lobe"]
+    assert rows["ward m_D=0 vs ward m_D=0.5"]["glossy_lobe"]

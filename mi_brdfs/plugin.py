@@ -88,12 +88,15 @@ class Reader:
         if isinstance(value, (int, float)):
             self.check(name, float(value), lo, hi)
             return mi.load_dict({"type": "uniform", "value": float(value)})
-        if isinstance(value, mi.Object):          # a nested texture
-            tex = props.get_texture(name)
-        else:                                    # an rgb colour
+        if not isinstance(value, mi.Object):      # an rgb colour
             rgb = [float(c) for c in value]
-            tex = mi.load_dict({"type": "srgb", "color": rgb, "unbounded": True})
-        rng = texture_range(tex)
+            for c in rgb:
+                self.check(name, c, lo, hi)
+            return mi.load_dict({"type": "srgb", "color": rgb, "unbounded": True})
+        tex = props.get_texture(name)            # a nested texture
+        # Its parameters are its values in RGB and mono variants; spectral
+        # variants store spectral-upsampling coefficients instead (unchecked).
+        rng = None if mi.is_spectral else texture_range(tex)
         if rng is not None:
             self.check(name, rng[0], lo, hi)
             self.check(name, rng[1], lo, hi)
@@ -121,7 +124,7 @@ def is_zero(tex) -> bool:
 
 def mean(spectrum) -> mi.Float:
     """Channel mean of a spectrum: the scalar weight used for lobe selection."""
-    return dr.mean(spectrum, axis=0) if dr.size_v(spectrum) > 1 else mi.Float(spectrum)
+    return dr.mean(spectrum, axis=0)
 
 
 def clamp01(x):

@@ -28,5 +28,5 @@ for variant in ["llvm_ad_mono", "llvm_ad_spectral", "llvm_ad_rgb"]:
 def test_every_plugin_in_other_variants():
     run = subprocess.run([sys.executable, "-c", CODE], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr[-3000:]
-    done = [line.split()[0] for line in run.stdout.splitlines() if line.endswith(" ok")]
-    assert done == ["llvm_ad_mono", "llvm_ad_spectral", "llvm_ad_rgb"], run.stdout
+    for variant in ("llvm_ad_mono", "llvm_ad_spectral", "llvm_ad_rgb"):
+        assert f"{variant} ok" in run.stdout, run.stdout

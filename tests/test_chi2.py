@@ -7,9 +7,10 @@ test_rough_conductor.py and friends): the histogram of the directions drawn by
 wrong lobe-selection probability, a pdf of a different roughness) are rejected:
 ``test_chi2_detects_a_wrong_pdf`` checks that the test has the power to do so.
 
-All chi-square runs share one Sidak-corrected significance level
-(``test_count=CHI2_TEST_COUNT``), so the whole family fails with probability 1%
-when every sampler is right.
+All chi-square runs of this module share one Sidak-corrected significance
+level (``test_count=CHI2_TEST_COUNT``), so this module's family fails with
+probability 1% when every sampler is right (each model module that adds its
+own chi-square grid corrects for its own count).
 """
 import math
 

@@ -24,7 +24,7 @@
        practice). A Blinn lobe is wider than a Phong lobe of the same gamma
        (about 4x the exponent gives a similar highlight). gamma = 0 makes the
        hdr model exactly Lambertian. The lobe is evaluated and sampled to ~1e-6
-       at any gamma (:mod:`mi_brdfs.powercos`); the bound ``MAX_EXPONENT`` = 1e8
+       at any gamma (:mod:`mi_brdfs.powercos`); the bound ``phong.MAX_EXPONENT`` = 1e8
        keeps it well above the spacing of float32 directions (~1e-7).
      - 100
    * - ``mode``
@@ -86,10 +86,8 @@ from __future__ import annotations
 import drjit as dr
 import mitsuba as mi
 
-from . import lambert, powercos
-from .plugin import BRDF, Reader, is_zero, mean
-
-MAX_EXPONENT = 1e8     # lobe ~1e-4 rad wide, still 1000x the float32 direction spacing
+from . import powercos
+from .phong import Phong
 
 
 # ----------------------------------------------------------------------------
@@ -149,56 +147,11 @@ def pdf_lobe(wi, wo, gamma):
 #  The plugin
 # ----------------------------------------------------------------------------
 
-class Blinn(BRDF):
+class Blinn(Phong):
+    """Phong's plugin glue (parameters, lobes, sampling) with Blinn's formulas."""
     name = "blinn"
-
-    def read(self, reader: Reader) -> None:
-        self.m_diffuse = reader.texture("diffuse_reflectance", 0.5)               # m_D
-        self.m_specular = reader.texture("specular_reflectance", 0.5)             # m_S
-        self.m_exponent = reader.texture("exponent", 100.0, 0.0, MAX_EXPONENT)    # gamma
-
-    def traverse(self, cb):
-        flags = mi.ParamFlags.Differentiable
-        cb.put("diffuse_reflectance", self.m_diffuse, flags)
-        cb.put("specular_reflectance", self.m_specular, flags)
-        cb.put("exponent", self.m_exponent, flags)
-
-    # --- lobes ---------------------------------------------------------------
-    def has_diffuse(self) -> bool:
-        return not is_zero(self.m_diffuse)
-
-    def has_specular(self) -> bool:
-        return not is_zero(self.m_specular)
-
-    def gamma(self, si, active):
-        return self.m_exponent.eval_1(si, active)
-
-    def lobes(self, si, wo, active):
-        f_d = mi.Spectrum(0.0)
-        f_s = mi.Spectrum(0.0)
-        if self.diffuse:
-            m_d = self.m_diffuse.eval(si, active)
-            f_d = lambert.f(m_d, mi.Frame3f.cos_theta(wo), self.mode)
-        if self.specular:
-            m_s = self.m_specular.eval(si, active)
-            spec = specular_scanline if self.mode == "scanline" else specular_hdr
-            f_s = m_s * spec(si.wi, wo, self.gamma(si, active))
-        return f_d, f_s
-
-    def selection_weights(self, si, active):
-        w_d = mean(self.m_diffuse.eval(si, active))
-        w_s = mean(self.m_specular.eval(si, active)) \
-            * specular_weight(self.gamma(si, active), self.mode)
-        return w_d, w_s
-
-    # --- specular sampling ----------------------------------------------------
-    def sample_specular(self, si, sample2, active):
-        return sample_lobe(si.wi, sample2, self.gamma(si, active))
-
-    def pdf_specular(self, si, wo, active):
-        return pdf_lobe(si.wi, wo, self.gamma(si, active))
-
-    def describe(self) -> dict:
-        return {"exponent": self.m_exponent,
-                "diffuse_reflectance": self.m_diffuse,
-                "specular_reflectance": self.m_specular}
+    specular_scanline = staticmethod(specular_scanline)
+    specular_hdr = staticmethod(specular_hdr)
+    specular_weight = staticmethod(specular_weight)
+    sample_lobe = staticmethod(sample_lobe)
+    pdf_lobe = staticmethod(pdf_lobe)

@@ -134,7 +134,14 @@ def pdf_lobe(wi, wo, gamma):
 # ----------------------------------------------------------------------------
 
 class Phong(BRDF):
+    """Also the base of :class:`mi_brdfs.blinn.Blinn`, which differs only by
+    the formulas below (its module's functions of the same names)."""
     name = "phong"
+    specular_scanline = staticmethod(specular_scanline)
+    specular_hdr = staticmethod(specular_hdr)
+    specular_weight = staticmethod(specular_weight)
+    sample_lobe = staticmethod(sample_lobe)
+    pdf_lobe = staticmethod(pdf_lobe)
 
     def read(self, reader: Reader) -> None:
         self.m_diffuse = reader.texture("diffuse_reflectance", 0.5)               # m_D
@@ -165,22 +172,22 @@ class Phong(BRDF):
             f_d = lambert.f(m_d, mi.Frame3f.cos_theta(wo), self.mode)
         if self.specular:
             m_s = self.m_specular.eval(si, active)
-            spec = specular_scanline if self.mode == "scanline" else specular_hdr
+            spec = self.specular_scanline if self.mode == "scanline" else self.specular_hdr
             f_s = m_s * spec(si.wi, wo, self.gamma(si, active))
         return f_d, f_s
 
     def selection_weights(self, si, active):
         w_d = mean(self.m_diffuse.eval(si, active))
         w_s = mean(self.m_specular.eval(si, active)) \
-            * specular_weight(self.gamma(si, active), self.mode)
+            * self.specular_weight(self.gamma(si, active), self.mode)
         return w_d, w_s
 
     # --- specular sampling ----------------------------------------------------
     def sample_specular(self, si, sample2, active):
-        return sample_lobe(si.wi, sample2, self.gamma(si, active))
+        return self.sample_lobe(si.wi, sample2, self.gamma(si, active))
 
     def pdf_specular(self, si, wo, active):
-        return pdf_lobe(si.wi, wo, self.gamma(si, active))
+        return self.pdf_lobe(si.wi, wo, self.gamma(si, active))
 
     def describe(self) -> dict:
         return {"exponent": self.m_exponent,

@@ -70,7 +70,8 @@ Cook-Torrance BRDF (times the cosine Mitsuba's ``eval`` includes).
 Sampling: cosine hemisphere for the diffuse lobe; for the specular lobe the
 visible normals of Beckmann and GGX (Mitsuba's ``MicrofacetDistribution``) and
 D(m)·cos(theta_m) for Blinn; the lobe is picked in proportion to
-k·mean(m_D) vs (1 - k)·mean(m_S)·Schlick(w_r·n). With k = 0 (or m_D = 0) there
+k·mean(m_D) (pi·k·mean(m_D) in scanline mode, whose Lambert term has no 1/pi)
+vs (1 - k)·mean(m_S)·Schlick(w_r·n). With k = 0 (or m_D = 0) there
 is no diffuse lobe, with k = 1 (or m_S = 0) no specular one.
 
 .. code-block:: xml
@@ -172,7 +173,7 @@ class CookTorrance(BRDF):
         return f_d, f_s
 
     def selection_weights(self, si, active):
-        w_d = self.m_k * mean(self.m_diffuse.eval(si, active))
+        w_d = self.m_k * lambert.albedo(mean(self.m_diffuse.eval(si, active)), self.mode)
         fresnel = mf.fresnel_schlick(self.m_f0, mi.Frame3f.cos_theta(si.wi))
         w_s = (1.0 - self.m_k) * mean(self.m_specular.eval(si, active)) * fresnel
         return w_d, w_s

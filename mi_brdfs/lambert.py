@@ -55,6 +55,12 @@ def f(m_d, cos_o, mode: str):
     return m_d * scale * dr.fmax(cos_o, 0.0)
 
 
+def albedo(m_d, mode: str):
+    """What f() reflects in all (hemispherical integral): m_D, or pi·m_D for the
+    scan-line form, which has no 1/pi. The diffuse lobe's selection weight."""
+    return m_d * (dr.pi if mode == "scanline" else 1.0)
+
+
 # ----------------------------------------------------------------------------
 #  The plugin
 # ----------------------------------------------------------------------------

@@ -274,7 +274,7 @@ class Ward(BRDF):
         return f_d, f_s
 
     def selection_weights(self, si, active):
-        return (mean(self.m_diffuse.eval(si, active)),
+        return (lambert.albedo(mean(self.m_diffuse.eval(si, active)), self.mode),
                 mean(self.m_specular.eval(si, active)))
 
     # --- specular sampling ----------------------------------------------------

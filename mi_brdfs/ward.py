@@ -92,7 +92,7 @@ tan²delta is exponential with rate A(phi) = cos²phi/a_t² + sin²phi/a_b²)::
     p_h(h) = exp(-tan²delta A(phi)) / (pi a_t a_b cos³delta),
 
 and wo = reflect(w_r, h) has p(wo) = p_h(h) / (4 wo·h). The lobe is picked in
-proportion to mean(m_D) vs mean(m_S).
+proportion to mean(m_D) (pi·mean(m_D) in scanline mode) vs mean(m_S).
 
 .. code-block:: xml
 

@@ -2,7 +2,14 @@
 
 ``import mi_brdfs`` finds a working LLVM for Dr.Jit (see ``_llvm``), activates
 the ``llvm_ad_rgb`` variant if no variant is active, and registers every plugin
-(the BSDFs and the ``scanline``/``hdr`` integrators) for the active variant. After switching variants, call ``mi_brdfs.register()``.
+(the BSDFs and the ``scanline``/``hdr`` integrators) for the active variant.
+After switching variants, call ``mi_brdfs.register()``.
+
+Layout: :mod:`mi_brdfs.bsdfs` (the plugins and their shared formulas),
+:mod:`mi_brdfs.render` (integrator, passes, tone mapping, image I/O),
+:mod:`mi_brdfs.tools` (the command line and its reports). The tools are also
+reachable as ``mi_brdfs.compare``, ``.validate``, ``.bench``, ``.analysis``
+and ``.catalog`` (imported on first use).
 """
 from . import _llvm
 
@@ -12,21 +19,16 @@ import mitsuba as mi         # noqa: E402
 
 _llvm.check()
 
-from . import integrator, plugin   # noqa: E402
-from .cook_torrance import CookTorrance   # noqa: E402
-from .blinn import Blinn                  # noqa: E402
-from .lambert import Lambert              # noqa: E402
-from .oren_nayar import OrenNayar         # noqa: E402
-from .phong import Phong                  # noqa: E402
-from .toon import Toon                    # noqa: E402
-from .ward import Ward                    # noqa: E402
+from . import bsdfs                       # noqa: E402
+from .bsdfs import (PLUGINS, Blinn, CookTorrance, Lambert, OrenNayar,  # noqa: E402
+                    Phong, Toon, Ward)
+from .render import integrator            # noqa: E402
 
-# In the lecture's order: diffuse models, then specular ones.
-PLUGINS = (Lambert, OrenNayar, Toon, Phong, Blinn, Ward, CookTorrance)
 DEFAULT_VARIANT = "llvm_ad_rgb"
+TOOLS = ("compare", "validate", "bench", "analysis", "catalog", "cli")
 
 __all__ = ["register", "PLUGINS", "DEFAULT_VARIANT", "Lambert", "OrenNayar", "Toon", "Phong",
-           "Blinn", "Ward", "CookTorrance"]
+           "Blinn", "Ward", "CookTorrance", *TOOLS]
 
 
 def register() -> str:
@@ -34,10 +36,18 @@ def register() -> str:
     none is active); returns the variant."""
     if mi.variant() is None:
         mi.set_variant(DEFAULT_VARIANT)
-    for cls in PLUGINS:
-        plugin.register_plugin(cls)
+    bsdfs.register()
     integrator.register()
     return mi.variant()
+
+
+def __getattr__(name: str):
+    """``mi_brdfs.compare`` and the other tools, imported on first use (their
+    dependencies are not needed to use the plugins)."""
+    if name in TOOLS:
+        import importlib
+        return importlib.import_module(f".tools.{name}", __name__)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 register()

@@ -15,8 +15,8 @@ import os
 
 import matplotlib.pyplot as plt
 
-from mi_brdfs.analysis import render_sphere
-from mi_brdfs.tonemap import to_srgb8
+from mi_brdfs.tools.analysis import render_sphere
+from mi_brdfs.render.tonemap import to_srgb8
 
 QUICK = os.environ.get("MI_BRDFS_QUICK") == "1"
 RES, SPP = (40, 4) if QUICK else (160, 64)

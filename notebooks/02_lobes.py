@@ -14,7 +14,7 @@ import matplotlib.pyplot as plt
 import mitsuba as mi
 import numpy as np
 
-from mi_brdfs import analysis, catalog
+from mi_brdfs.tools import analysis, catalog
 
 QUICK = os.environ.get("MI_BRDFS_QUICK") == "1"
 STRATA = (128, 512) if QUICK else (512, 2048)

@@ -14,8 +14,8 @@ import matplotlib.pyplot as plt
 import mitsuba as mi
 import numpy as np
 
-from mi_brdfs import compare, validate
-from mi_brdfs.tonemap import to_srgb8
+from mi_brdfs.tools import compare, validate
+from mi_brdfs.render.tonemap import to_srgb8
 
 QUICK = os.environ.get("MI_BRDFS_QUICK") == "1"
 out = os.path.join(tempfile.mkdtemp(), "report")
@@ -52,7 +52,7 @@ plt.show()
 # ## The compare API on two renders of our own
 
 # %%
-from mi_brdfs.analysis import render_sphere  # noqa: E402
+from mi_brdfs.tools.analysis import render_sphere  # noqa: E402
 
 a = render_sphere({"type": "cook_torrance", "distribution": "ggx", "alpha": 0.3}, 64, 16)
 b = render_sphere({"type": "cook_torrance", "distribution": "beckmann", "alpha": 0.3}, 64, 16)

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import matplotlib.pyplot as plt
 
-from mi_brdfs import bench
+from mi_brdfs.tools import bench
 
 committed = Path("..") / "docs" / "benchmarks" / "results.json"
 if os.environ.get("MI_BRDFS_RERUN_BENCH") == "1" or not committed.exists():

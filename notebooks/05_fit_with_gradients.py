@@ -15,8 +15,8 @@ import matplotlib.pyplot as plt
 import mitsuba as mi
 import numpy as np
 
-from mi_brdfs.analysis import sphere_scene
-from mi_brdfs.tonemap import to_srgb8
+from mi_brdfs.tools.analysis import sphere_scene
+from mi_brdfs.render.tonemap import to_srgb8
 
 QUICK = os.environ.get("MI_BRDFS_QUICK") == "1"
 RES, SPP = (48, 4) if QUICK else (96, 8)

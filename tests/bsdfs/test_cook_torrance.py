@@ -156,7 +156,7 @@ def test_render_equals_roughconductor(distribution):
 def test_blinn_distribution_is_normalised(alpha):
     """Integral of D(m) cos(theta_m) over the hemisphere is 1 (physics), by a
     quadrature in theta log-spaced towards the normal; alpha = 0 is the clamped minimum."""
-    from mi_brdfs import microfacet as mf
+    from mi_brdfs.bsdfs import microfacet as mf
     t = np.logspace(-9, np.log10(np.pi / 2), 200_000)
     m = mi.Vector3f(np.sin(t), 0 * t, np.cos(t))
     d = np.array(mf.D["blinn"](m, mi.Float(max(alpha, mf.ALPHA_MIN))), dtype=np.float64)
@@ -169,7 +169,7 @@ def test_blinn_distribution_is_normalised(alpha):
 def test_blinn_sampler_keeps_narrow_lobes(alpha):
     """Sampled normals have density (e+1)/(2 pi) cos^e, e = 2/alpha² - 1, so
     E[sin²(theta_m)] = 2/(e+3) = alpha²: float32 cancellation would collapse it."""
-    from mi_brdfs import microfacet as mf
+    from mi_brdfs.bsdfs import microfacet as mf
     rng = np.random.default_rng(9)
     n = 1_000_000
     m = mf.sample_blinn(mi.Point2f(rng.random(n), rng.random(n)), mi.Float(alpha))

@@ -56,7 +56,7 @@ sin(theta_o) d(theta_o) = -4c dc, so
 
 Away from the normal the albedo decreases monotonically (the lobe, mapped from
 half vectors to light directions by dw_o = 4 (d·h) dw_h, is squeezed and cut
-by the horizon; measured by the furnace test, tests/test_blinn.py), so with
+by the horizon; measured by the furnace test, tests/bsdfs/test_blinn.py), so with
 m_D + m_S <= 1 the surface never reflects more than it receives. At gamma = 0,
 N = 1/pi and the lobe is Lambert's; for large gamma N ~ (gamma + 6)/(8 pi).
 The popular (gamma + 8)/(8 pi) exceeds N for every gamma > 0 (their ratio minus

@@ -2,7 +2,7 @@
 sampling (chi-square, high exponents), extremes, errors and parameters.
 
 The NumPy transcription below is written from the lecture and the issue, not
-from mi_brdfs/blinn.py: d the light (``wo``), w the viewer (``si.wi``), n = +z,
+from mi_brdfs/bsdfs/blinn.py: d the light (``wo``), w the viewer (``si.wi``), n = +z,
 h = normalize(d + w).
 """
 import itertools

@@ -8,7 +8,7 @@ import sys
 import numpy as np
 import pytest
 
-from mi_brdfs import bench
+from mi_brdfs.tools import bench
 
 
 def test_efficiency_by_hand():

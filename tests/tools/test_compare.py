@@ -9,7 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mi_brdfs import compare, exr, tonemap
+from mi_brdfs.render import exr, tonemap
+from mi_brdfs.tools import compare
 
 BIN = Path(sys.executable).parent
 

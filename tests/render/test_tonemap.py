@@ -6,7 +6,7 @@ import pytest
 
 import mitsuba as mi
 
-from mi_brdfs import exr, tonemap
+from mi_brdfs.render import exr, tonemap
 from test_integrator import scene_dict
 
 X = np.array([0.0, 0.01, 0.18, 0.5, 1.0, 2.0, 16.0, 1e30])

@@ -90,7 +90,7 @@ import drjit as dr
 import mitsuba as mi
 
 from . import lambert, microfacet as mf
-from .plugin import BRDF, Reader, is_zero, mean
+from .base import BRDF, Reader, is_zero, mean
 
 
 # ----------------------------------------------------------------------------

@@ -2,7 +2,7 @@
 sampling (chi-square, high exponents), extremes, errors and parameters.
 
 The NumPy transcription below is written from the lecture and the issue, not
-from mi_brdfs/phong.py: d the light (``wo``), w the viewer (``si.wi``), n = +z,
+from mi_brdfs/bsdfs/phong.py: d the light (``wo``), w the viewer (``si.wi``), n = +z,
 r = 2 (d·n) n - d.
 """
 import itertools
@@ -15,7 +15,7 @@ from scipy import stats
 from conftest import random_hemisphere, surface, vec
 import mitsuba as mi
 
-from mi_brdfs import powercos
+from mi_brdfs.bsdfs import powercos
 
 
 

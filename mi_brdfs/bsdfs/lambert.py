@@ -40,7 +40,7 @@ from __future__ import annotations
 import drjit as dr
 import mitsuba as mi
 
-from .plugin import BRDF, Reader, is_zero
+from .base import BRDF, Reader, is_zero
 
 
 # ----------------------------------------------------------------------------

@@ -77,7 +77,7 @@ p = q = 0 (tan 90°); that node holds the value of its neighbours (cos β =
 both directions graze the surface (there T = sin α sin β / max(p, q) has a
 kink along p = q whose slope grows as 1/max(p, q)), and near the normal it
 falls only as sqrt(h) (the sqrt(1 - cos²) in sin α and tan β).
-``tests/test_oren_nayar.py`` prints it; at the default 64 nodes, σ = π/2,
+``tests/bsdfs/test_oren_nayar.py`` prints it; at the default 64 nodes, σ = π/2,
 m_D = 1 (hdr eval <= 0.32): RMS 2e-4 over the hemisphere, at most 0.003 (3 %)
 where both cosines are >= 0.1, 0.04 where both directions graze. (The table buys nothing on a CPU: sin α tan β is also
 sqrt(1-p²)·sqrt(1-q²)/max(p, q) without acos; it is the lecture's GPU trick.)
@@ -102,7 +102,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from .plugin import BRDF, Reader, is_zero
+from .base import BRDF, Reader, is_zero
 
 METHODS = ("exact", "table")
 SIGMA_MAX = 0.5 * math.pi          # σ in [0, π/2]

@@ -8,9 +8,10 @@ import numpy as np
 import pytest
 
 
-from mi_brdfs import cli, exr
+from mi_brdfs.render import exr
+from mi_brdfs.tools import cli
 
-SCENES = Path(__file__).resolve().parent.parent / "scenes"
+SCENES = Path(__file__).resolve().parents[2] / "scenes"
 ALL = sorted(p.stem for p in SCENES.glob("*.xml"))
 
 

@@ -39,7 +39,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import exr, tonemap
+from ..render import exr, tonemap
 
 CHANNELS = "RGB"
 THRESHOLDS = {            # option name -> (metric, comparison)

@@ -8,8 +8,7 @@
 - the lobes: a diffuse lobe (cosine- or uniform-hemisphere sampling) and/or a glossy lobe
   (the model's own sampler), declared in ``m_flags`` only when present, picked
   in proportion to an estimate of their weight, with the mixture pdf;
-- binding the plain-Python plugin classes onto the active variant's ``mi.BSDF``
-  (Mitsuba's classes are per variant, so ``register()`` builds them anew).
+- registration for the active variant (through :func:`mi_brdfs._binding.bind`).
 
 A model subclasses :class:`BRDF` and supplies ``read(props)``,
 ``lobes(si, wo, active) -> (f_diffuse, f_specular)`` (eval convention, i.e.
@@ -26,6 +25,8 @@ import math
 import drjit as dr
 import mitsuba as mi
 import numpy as np
+
+from .._binding import bind
 
 MODES = ("scanline", "hdr")
 SAMPLINGS = ("lobe", "cosine")    # each lobe's own importance sampling, or cosine for all
@@ -314,25 +315,8 @@ class BRDF:
 
 
 # ----------------------------------------------------------------------------
-#  Binding to the active variant
+#  Registration
 # ----------------------------------------------------------------------------
-
-_bound: dict[tuple[str, type], type] = {}
-
-
-def bind(cls: type, root: str = "BSDF") -> type:
-    """The class ``cls`` rebuilt on top of the active variant's ``mi.<root>``.
-
-    Mitsuba's classes differ per variant and nanobind allows a single base, so
-    each plain-Python class of the hierarchy is re-created per variant.
-    """
-    key = (mi.variant(), cls)
-    if key not in _bound:
-        base = getattr(mi, root) if cls.__base__ is object else bind(cls.__base__, root)
-        body = {k: v for k, v in vars(cls).items() if k not in ("__dict__", "__weakref__")}
-        _bound[key] = type(cls.__name__, (base,), body)
-    return _bound[key]
-
 
 def register_plugin(cls: type) -> None:
     """Register ``cls`` under ``cls.name`` for the active variant."""

@@ -45,7 +45,7 @@ Willems 1994): at normal incidence r = n and alpha = theta_o, so the specular
 albedo is m_S (gamma+2)/(2 pi) · integral cos^gamma(theta) cos(theta) dw = m_S
 exactly, and it only decreases towards grazing incidence (the lobe tilts away
 from the normal and the horizon cuts it; about m_S cos(theta_i) for narrow
-lobes, measured by the furnace test in tests/test_phong.py): with
+lobes, measured by the furnace test in tests/bsdfs/test_phong.py): with
 m_D + m_S <= 1 the surface never reflects more than it receives. w_r·r = d·r' (r' the viewer's mirror
 direction) is symmetric in d and w_r, so the hdr BRDF is reciprocal.
 
@@ -79,7 +79,7 @@ import drjit as dr
 import mitsuba as mi
 
 from . import lambert, powercos
-from .plugin import BRDF, Reader, is_zero, mean
+from .base import BRDF, Reader, is_zero, mean
 
 MAX_EXPONENT = 1e8     # lobe ~1e-4 rad wide, still 1000x the float32 direction spacing
 

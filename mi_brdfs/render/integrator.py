@@ -57,7 +57,7 @@ from __future__ import annotations
 import drjit as dr
 import mitsuba as mi
 
-from .plugin import bind
+from .._binding import bind
 
 
 class Scanline:

@@ -74,7 +74,7 @@ The toon colours are already the shaded result (they replace Lambert's
 m_D·clamp(d·n)), so there is no cos θ_o factor in either mode: the hdr mode is
 the scanline one without the [0, 1] clamps, a stylised model with no energy
 claim (its white-furnace "albedo" is 3.77 for the defaults at normal incidence, see
-``tests/test_toon.py``). The cartoon's dark side is m_D2, also for lights below
+``tests/bsdfs/test_toon.py``). The cartoon's dark side is m_D2, also for lights below
 the surface (``lit_from_behind()``); the specular is 0 for them, and a viewer
 below the surface gets nothing. A cosine exactly equal to its threshold takes
 the first colour (>=, as in the lecture).
@@ -127,7 +127,7 @@ import drjit as dr
 import mitsuba as mi
 
 from . import microfacet as mf
-from .plugin import BRDF, Reader, is_zero, mean
+from .base import BRDF, Reader, is_zero, mean
 
 SPECULAR_MODELS = ("phong", "blinn")
 CONE_MIN = 1e-4            # smallest 1 - cos(half-angle) of the sampling cone

@@ -70,7 +70,7 @@ on the tb-plane with t; theta_i of the light, theta_r of the viewer)::
 f_s is already the radiometric Ward BRDF times cos theta_o = d·n,
 m_S exp(...) / (4 pi a_t a_b sqrt((w_r·n)(d·n))) · (d·n), so the hdr mode is the
 same value unclamped; it is reciprocal. Its directional albedo (measured and
-printed by tests/test_ward.py, m_S = 1) is at most 1 up to 89 deg for
+printed by tests/bsdfs/test_ward.py, m_S = 1) is at most 1 up to 89 deg for
 alpha <= 0.5 (0.99 at normal incidence for alpha = 0.05, 0.59 for 0.5) and
 falls roughly as cos(theta_r) for narrow lobes; the 1/sqrt(w_r·n) factor then
 makes it diverge as C/sqrt(cos theta_r) within a fraction of a degree of the
@@ -109,7 +109,7 @@ import drjit as dr
 import mitsuba as mi
 
 from . import lambert
-from .plugin import BRDF, Reader, is_zero, mean
+from .base import BRDF, Reader, is_zero, mean
 
 ALPHA_MIN = 1e-4      # smallest roughness used (0 is clamped here)
 TINY = 1e-18          # keeps cosines away from 0 (TINY² is still a normal float32)

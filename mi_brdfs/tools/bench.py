@@ -175,7 +175,7 @@ class References:
     def get(self, d: dict) -> np.ndarray:
         import mitsuba as mi
 
-        from . import exr
+        from ..render import exr
         path = os.path.join(self.directory, f"ref-{self.key(d)}.exr")
         if os.path.exists(path):
             return exr.read_exr(path).astype(np.float64)
@@ -448,7 +448,7 @@ def _fmt(v) -> str:
 
 
 def write_outputs(out_dir: str, results: dict) -> None:
-    from .exr import write_atomically
+    from ..render.exr import write_atomically
     os.makedirs(out_dir, exist_ok=True)
     write_atomically(os.path.join(out_dir, "results.json"),
                      lambda p: open(p, "w").write(json.dumps(results, indent=1)))

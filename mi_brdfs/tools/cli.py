@@ -4,7 +4,7 @@
                     [--png out.png [--tonemap NAME] [--exposure EV]] [--seed S]
                     [--variant NAME] [--verbose]
     mi-brdfs compare REFERENCE.exr TEST.exr [...] -o REPORT_DIR [--max-rmse X ...]
-                    (see mi_brdfs/compare.py; exit 0 pass, 3 a threshold failed)
+                    (see mi_brdfs/tools/compare.py; exit 0 pass, 3 a threshold failed)
 
 Registers the plugins, loads the scene with its ``-D`` defaults (as Mitsuba's
 own ``mitsuba`` command does), renders the spp in passes with different seeds
@@ -22,7 +22,8 @@ import re
 import sys
 import time
 
-from . import exr, tonemap
+from ..render import exr, tonemap
+from ..render.passes import render_passes
 
 
 class CLIError(Exception):
@@ -47,13 +48,6 @@ def check_writable(path: str) -> None:
         raise CLIError(f"cannot write {path}: directory {directory} is not writable")
 
 
-def split_passes(spp: int, passes: int) -> list[int]:
-    """spp as `passes` near-equal chunks (none empty)."""
-    passes = max(1, min(passes, spp))
-    base, extra = divmod(spp, passes)
-    return [base + (i < extra) for i in range(passes)]
-
-
 def progress(done: int, total: int, elapsed: float, stream=sys.stderr) -> None:
     width = 30
     filled = int(width * done / total)
@@ -63,23 +57,6 @@ def progress(done: int, total: int, elapsed: float, stream=sys.stderr) -> None:
     if done == total:
         stream.write("\n")
     stream.flush()
-
-
-def render_passes(scene, spp: int, passes: int = 8, seed: int = 0, show=progress):
-    """Render ``spp`` samples per pixel in passes with distinct seeds; the
-    spp-weighted mean as an (H, W, C) NumPy array."""
-    import mitsuba as mi
-    import numpy as np
-
-    chunks = split_passes(spp, passes)
-    total, done, start = None, 0, time.perf_counter()
-    for i, n in enumerate(chunks):
-        image = np.array(mi.render(scene, spp=n, seed=seed * len(chunks) + i), dtype=np.float64)
-        total = image * n if total is None else total + image * n
-        done += n
-        if show:
-            show(done, spp, time.perf_counter() - start)
-    return (total / spp).astype(np.float32)
 
 
 def scene_spp(scene) -> int:

@@ -1,0 +1,28 @@
+"""The course's BRDF models as Mitsuba BSDF plugins, one module per model.
+
+- :mod:`.base` — what every plugin does alike (parameters, modes, lobes, sampling);
+- the models, in the lecture's order: :mod:`.lambert`, :mod:`.oren_nayar`,
+  :mod:`.toon` (diffuse), :mod:`.phong`, :mod:`.blinn`, :mod:`.ward`,
+  :mod:`.cook_torrance` (specular);
+- the shared formulas: :mod:`.microfacet` (D, F, G), :mod:`.powercos`
+  (power-cosine lobes in float32).
+"""
+from __future__ import annotations
+
+from .base import register_plugin
+from .blinn import Blinn
+from .cook_torrance import CookTorrance
+from .lambert import Lambert
+from .oren_nayar import OrenNayar
+from .phong import Phong
+from .toon import Toon
+from .ward import Ward
+
+# In the lecture's order: diffuse models, then specular ones.
+PLUGINS = (Lambert, OrenNayar, Toon, Phong, Blinn, Ward, CookTorrance)
+
+
+def register() -> None:
+    """Register every BSDF plugin for the active variant."""
+    for cls in PLUGINS:
+        register_plugin(cls)

@@ -13,9 +13,15 @@ def split_passes(spp: int, passes: int) -> list[int]:
     return [base + (i < extra) for i in range(passes)]
 
 
-def render_passes(scene, spp: int, passes: int = 8, seed: int = 0, show=None):
+def render_passes(scene, spp: int, passes: int = 8, seed: int = 0, show=None,
+                  freeze: bool = True, log=None):
     """Render ``spp`` samples per pixel in passes with distinct seeds; the
-    spp-weighted mean as an (H, W, C) NumPy array."""
+    spp-weighted mean of every film channel as an (H, W, C) NumPy array.
+
+    ``show(done_spp, total_spp, elapsed_s)`` is called after each pass;
+    ``log(message)`` receives informational messages (e.g. why a render was
+    not frozen). ``freeze`` is reserved for replaying passes through
+    ``dr.freeze`` (not implemented yet: every pass is traced)."""
     import mitsuba as mi
     import numpy as np
 

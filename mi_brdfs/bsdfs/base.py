@@ -1,61 +1,162 @@
-"""What every mi_brdfs plugin does alike.
+"""What every mi_brdfs plugin does alike, written once.
 
-- reading and validating parameters (colours and scalars as Mitsuba textures,
-  scalars as opaque differentiable Floats, string choices), with load-time errors
-  that name the plugin, the parameter, the value and the valid range;
-- the ``mode`` switch: ``"scanline"`` clamps each lobe per colour channel to
-  [0, 1] (the lecture's scan-line BRDFs), ``"hdr"`` keeps them unclamped;
-- the lobes: a diffuse lobe (cosine- or uniform-hemisphere sampling) and/or a glossy lobe
-  (the model's own sampler), declared in ``m_flags`` only when present, picked
-  in proportion to an estimate of their weight, with the mixture pdf;
-- registration for the active variant (through :func:`mi_brdfs._binding.bind`).
+- **Parameters** (:class:`Param`): each model declares its parameters (name,
+  default, valid range, kind, role) in ``PARAMS``; the base reads them (colours
+  and scalars as Mitsuba textures, plain numbers as opaque differentiable
+  Floats), checks them at load time *and* at ``params.update()`` with the same
+  one-line message (plugin, parameter, value, valid range), and exposes them
+  in ``traverse`` as differentiable.
+- **Modes**: ``"scanline"`` clamps each lobe per colour channel to [0, 1] (the
+  lecture's scan-line BRDFs), ``"hdr"`` keeps them unclamped.
+- **Lobes**: a diffuse lobe (cosine- or uniform-hemisphere sampling), a glossy
+  lobe (the model's own sampler) and, with ``energy_compensation``, the
+  multiple-scattering lobe of :mod:`.energy` (cosine sampling), attached to the
+  lobe it compensates. Each lobe is picked in proportion to an estimate of its
+  albedo; ``pdf`` is the exact mixture; the sample weight is eval / pdf.
+- **Model only what a scene requires**: a lobe whose colour or weight is the
+  constant that switches it off (a colour 0, ``k`` = 0 or 1) is not declared in
+  the flags and not traced. The rule that keeps inverse rendering right: a
+  parameter counts as switched off only while it is a constant, is not
+  grad-enabled and was never changed through ``params.update()``. Once a
+  parameter is updated or differentiated its lobe stays traced (a gradient at
+  the bound 0 is then exact, and an optimiser can leave the bound); the lobes
+  are decided again in ``parameters_changed``.
+- **Every variant**: scalar and JIT, RGB, mono and spectral; polarized variants
+  get the plugins as depolarizers (Mitsuba's ``depolarizer``, as its ``diffuse``).
+- **Per call**, each texture is evaluated once (:meth:`BRDF.inputs`) and shared
+  by the lobes, the selection weights, the sampler and the pdf.
 
-A model subclasses :class:`BRDF` and supplies ``read(props)``,
-``lobes(si, wo, active) -> (f_diffuse, f_specular)`` (eval convention, i.e.
-including the lecture's clamp(d·n) in scanline mode and cos θ_o in hdr mode,
-before the per-lobe clamp; lanes with wi or wo below the surface are zeroed
-by the base, unless ``lit_from_behind()``), ``lobe_weights()`` (the constant factors that
-multiply each clamped lobe, e.g. k and 1-k), ``selection_weights(si, active)``,
-and, if it has a glossy lobe, ``sample_specular`` / ``pdf_specular``.
+A model subclasses :class:`BRDF` and supplies:
+
+``PARAMS``
+    its :class:`Param` declarations (``read()`` may be overridden for options
+    and parameters that exclude each other; it then calls ``reader.read(p)``);
+``has_diffuse()``, ``has_specular()``
+    whether a lobe can matter, through :meth:`BRDF.off`;
+``evaluate(si, active)``
+    the textures evaluated at ``si``, as a :class:`types.SimpleNamespace`;
+``f_diffuse(inp, si, wo)``, ``f_specular(inp, si, wo)``
+    each lobe in eval convention (the lecture's clamp(d·n) in scanline mode,
+    cos θ_o in hdr mode), before the per-lobe clamp; lanes with ``wi`` or ``wo``
+    below the surface are zeroed by the base, unless ``lit_from_behind()``;
+``lobe_weights(inp)``
+    the factors multiplying each (clamped) lobe, e.g. k and 1 - k;
+``selection_weights(inp, si)``
+    estimates of each lobe's albedo (weights included), for lobe selection;
+``sample_specular(inp, si, sample2)``, ``pdf_specular(inp, si, wo)``
+    the glossy lobe's sampler and its density;
+and, if ``compensable``: ``albedo(inp, v)``, ``albedo_average(inp)`` and
+``ms_colour(inp)`` for :mod:`.energy`.
 """
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
+from types import SimpleNamespace
+from typing import NamedTuple
 
 import drjit as dr
 import mitsuba as mi
 import numpy as np
 
 from .._binding import bind
+from . import energy
 
 MODES = ("scanline", "hdr")
 SAMPLINGS = ("lobe", "cosine")    # each lobe's own importance sampling, or cosine for all
 
 
 class ParameterError(ValueError):
-    """A plugin parameter has a bad value (raised at load time)."""
+    """A plugin parameter has a bad value (raised at load time or at update())."""
 
 
 # ----------------------------------------------------------------------------
-#  Parameter reading and validation
+#  Parameters: declaration, reading, checking
 # ----------------------------------------------------------------------------
 
-def _fmt_range(lo: float | None, hi: float | None) -> str:
-    return f"[{'-inf' if lo is None else f'{lo:g}'}, {'inf' if hi is None else f'{hi:g}'}]"
+@dataclass(frozen=True)
+class Param:
+    """One plugin parameter: how it is read, checked, exposed and tested.
+
+    ``kind``: ``"spectrum"`` (float, rgb or any texture, evaluated per colour
+    channel), ``"scalar"`` (float or texture, evaluated as one value, e.g. a
+    roughness) or ``"float"`` (a plain number, an opaque Float; its traverse
+    key is the bare name). ``role``: ``"colour"`` and ``"weight"`` scale a lobe
+    (their gradients are checked at their bounds too), ``"shape"`` shapes it.
+    ``upper`` is the upper end of the range the tests probe when ``hi`` is
+    unbounded (colours: 1, a white surface).
+    """
+    name: str
+    default: float
+    lo: float | None = 0.0
+    hi: float | None = None
+    kind: str = "spectrum"
+    role: str = "colour"
+    upper: float | None = None
+
+    def valid(self) -> str:
+        return f"[{_fmt(self.lo, '-inf')}, {_fmt(self.hi, 'inf')}]"
+
+    def probe_hi(self) -> float:
+        """The largest value the tests try (hi, or ``upper``, or 1)."""
+        return self.hi if self.hi is not None else (self.upper if self.upper is not None else 1.0)
 
 
-def texture_range(tex) -> tuple[float, float] | None:
-    """(min, max) of every numeric parameter of a texture, or None if it has none."""
-    values = []
-    for _, value in mi.traverse(tex).items():
-        try:
-            values.append(np.asarray(value, dtype=np.float64).ravel())
-        except (TypeError, ValueError):
+def _fmt(x: float | None, none: str) -> str:
+    return none if x is None else f"{x:g}"
+
+
+def parameter_error(plugin: str, name: str, value, valid: str) -> ParameterError:
+    """The one-line message of every bad parameter value."""
+    return ParameterError(f"{plugin}: parameter '{name}' = {value!r} is invalid; valid: {valid}")
+
+
+def check_value(plugin: str, name: str, value: float, lo: float | None, hi: float | None,
+                valid: str | None = None) -> None:
+    """Raise ParameterError unless lo <= value <= hi (NaN is never valid)."""
+    lo_ok = lo is None or value >= lo
+    hi_ok = hi is None or value <= hi
+    if not (lo_ok and hi_ok) or (isinstance(value, float) and math.isnan(value)):
+        raise parameter_error(plugin, name, value,
+                              valid or f"[{_fmt(lo, '-inf')}, {_fmt(hi, 'inf')}]")
+
+
+def _arrays(obj) -> list:
+    """The numeric arrays of a texture's parameters (or of a plain Float)."""
+    if isinstance(obj, mi.Object):
+        out = []
+        for _, value in mi.traverse(obj).items():
+            if isinstance(value, (float, int)) or (dr.is_array_v(value) and not dr.is_integral_v(value)
+                                                   and not dr.is_mask_v(value)):
+                out.append(value)
+        return out
+    return [obj]
+
+
+def value_range(obj) -> tuple[float, float] | None:
+    """(min, max) over every numeric parameter of a texture (or a Float); NaN if
+    any value is NaN; None if it has none. Reduced in Dr.Jit, without copies."""
+    lo, hi = math.inf, -math.inf
+    found = False
+    for a in _arrays(obj):
+        x = np.asarray(dr.detach(a) if dr.is_array_v(a) else a, dtype=np.float64).ravel()
+        if x.size == 0:
             continue
-    if not values:
-        return None
-    allv = np.concatenate(values)
-    return float(allv.min()), float(allv.max())
+        found = True
+        if np.isnan(x).any():
+            return math.nan, math.nan
+        lo, hi = min(lo, float(x.min())), max(hi, float(x.max()))
+    return (lo, hi) if found else None
+
+
+def grad_enabled(obj) -> bool:
+    """True if a Float or any parameter of a texture is attached to the AD graph."""
+    return any(dr.grad_enabled(a) for a in _arrays(obj) if dr.is_array_v(a))
+
+
+def to_float(x) -> float:
+    """A Python float from an opaque Float (JIT variants) or a float (scalar ones)."""
+    return float(x[0]) if dr.is_array_v(x) else float(x)
 
 
 class Reader:
@@ -65,49 +166,42 @@ class Reader:
         self.plugin, self.props = plugin, props
 
     def error(self, name: str, value, valid: str) -> ParameterError:
-        return ParameterError(
-            f"{self.plugin}: parameter '{name}' = {value!r} is invalid; valid: {valid}")
+        return parameter_error(self.plugin, name, value, valid)
 
     def check(self, name: str, value, lo: float | None, hi: float | None) -> None:
-        lo_ok = lo is None or value >= lo
-        hi_ok = hi is None or value <= hi
-        if not (lo_ok and hi_ok) or (isinstance(value, float) and math.isnan(value)):
-            raise self.error(name, value, _fmt_range(lo, hi))
+        check_value(self.plugin, name, value, lo, hi)
 
-    def texture(self, name: str, default: float, lo: float | None = 0.0,
-                hi: float | None = None):
-        """A colour or scalar: float, rgb or any Mitsuba texture.
-
-        Colours above 1 are accepted (``srgb`` with ``unbounded``), so the
-        scanline mode's clamp is what limits them, as in the lecture.
-        """
+    def read(self, p: Param):
+        """The value of parameter ``p``: a texture, or an opaque Float for kind "float"."""
         props = self.props
-        if name not in props:
-            self.check(name, default, lo, hi)
-            return mi.load_dict({"type": "uniform", "value": default})
-        value = props[name]
+        if p.kind == "float":
+            value = float(props.get(p.name, p.default))
+            self.check(p.name, value, p.lo, p.hi)
+            return dr.opaque(mi.Float, value)
+        if p.name not in props:
+            self.check(p.name, p.default, p.lo, p.hi)
+            return mi.load_dict({"type": "uniform", "value": p.default})
+        value = props[p.name]
         if isinstance(value, (int, float)):
-            self.check(name, float(value), lo, hi)
+            self.check(p.name, float(value), p.lo, p.hi)
             return mi.load_dict({"type": "uniform", "value": float(value)})
         if not isinstance(value, mi.Object):      # an rgb colour
             rgb = [float(c) for c in value]
             for c in rgb:
-                self.check(name, c, lo, hi)
+                self.check(p.name, c, p.lo, p.hi)
+            # Colours above 1 are accepted (``unbounded``): the scanline clamp limits them.
             return mi.load_dict({"type": "srgb", "color": rgb, "unbounded": True})
-        tex = props.get_texture(name)            # a nested texture
-        # Its parameters are its values in RGB and mono variants; spectral
-        # variants store spectral-upsampling coefficients instead (unchecked).
-        rng = None if mi.is_spectral else texture_range(tex)
-        if rng is not None:
-            self.check(name, rng[0], lo, hi)
-            self.check(name, rng[1], lo, hi)
+        tex = props.get_texture(p.name)            # a nested texture
+        self.check_texture(p, tex)
         return tex
 
-    def scalar(self, name: str, default: float, lo: float | None, hi: float | None):
-        """A plain scalar, stored as an opaque (differentiable, non-baked) Float."""
-        value = float(self.props.get(name, default))
-        self.check(name, value, lo, hi)
-        return dr.opaque(mi.Float, value)
+    def check_texture(self, p: Param, tex) -> None:
+        # Its parameters are its values in RGB and mono variants; spectral
+        # variants store spectral-upsampling coefficients instead (unchecked).
+        rng = None if mi.is_spectral else value_range(tex)
+        if rng is not None:
+            self.check(p.name, rng[0], p.lo, p.hi)
+            self.check(p.name, rng[1], p.lo, p.hi)
 
     def choice(self, name: str, default: str, options: tuple[str, ...]) -> str:
         value = str(self.props.get(name, default))
@@ -115,12 +209,11 @@ class Reader:
             raise self.error(name, value, "one of " + ", ".join(f'"{o}"' for o in options))
         return value
 
-
-def is_zero(tex) -> bool:
-    """True for a texture that is a constant 0 everywhere (its lobe can be dropped)."""
-    rng = texture_range(tex)
-    return (rng is not None and rng == (0.0, 0.0)
-            and not tex.is_spatially_varying())
+    def boolean(self, name: str, default: bool) -> bool:
+        value = self.props.get(name, default)
+        if not isinstance(value, bool):
+            raise self.error(name, value, "true or false")
+        return value
 
 
 def mean(spectrum) -> mi.Float:
@@ -133,6 +226,13 @@ def clamp01(x):
     return dr.fmin(dr.fmax(x, 0.0), 1.0)
 
 
+class Lobes(NamedTuple):
+    """Which lobes a call evaluates (Python booleans: decided at trace time)."""
+    diffuse: bool
+    specular: bool
+    multiple: bool
+
+
 # ----------------------------------------------------------------------------
 #  The shared BSDF logic
 # ----------------------------------------------------------------------------
@@ -141,6 +241,9 @@ class BRDF:
     """Base of every mi_brdfs plugin (plain Python; bound to mi.BSDF by bind())."""
 
     name = "brdf"                     # the registered plugin name
+    PARAMS: tuple[Param, ...] = ()
+    compensable = False               # has an energy_compensation parameter
+    compensates = "specular"          # the lobe the multiple-scattering lobe belongs to
 
     def __init__(self, props: mi.Properties):
         mi.BSDF.__init__(self, props)
@@ -149,18 +252,109 @@ class BRDF:
         # "cosine" samples every lobe from the cosine hemisphere: for measuring
         # what importance sampling gains (mi-brdfs bench), not for rendering.
         self.sampling = reader.choice("sampling", "lobe", SAMPLINGS)
+        self.energy_compensation = False
+        if self.compensable:
+            self.energy_compensation = reader.boolean("energy_compensation", False)
+            if self.energy_compensation and self.mode == "scanline":
+                raise reader.error("energy_compensation", True,
+                                   'false with mode="scanline" (the lecture\'s scan-line '
+                                   'formulas are not normalised; compensation is for mode="hdr")')
+        self.params: dict[str, Param] = {}     # the parameters read, by name
+        self.live: set[str] = set()            # parameters updated or differentiated
         self.read(reader)
         self.update_lobes()
 
-    # --- what a model provides -------------------------------------------------
+    # --- parameters --------------------------------------------------------------
     def read(self, reader: Reader) -> None:
-        raise NotImplementedError
+        """Read every declared parameter (override to read options too)."""
+        for p in self.PARAMS:
+            self.read_param(reader, p)
 
+    def read_param(self, reader: Reader, p: Param):
+        """Read ``p`` into ``self.m_<name>`` and remember it as present."""
+        value = reader.read(p)
+        setattr(self, "m_" + p.name, value)
+        self.params[p.name] = p
+        if grad_enabled(value):
+            self.live.add(p.name)
+        return value
+
+    def traverse(self, cb):
+        for name in self.params:
+            cb.put(name, getattr(self, "m_" + name), mi.ParamFlags.Differentiable)
+
+    def parameters_changed(self, keys=[]):
+        """Check the changed parameters as at load time, mark them live, and
+        decide again which lobes the scene requires."""
+        names = {key.split(".")[0] for key in keys}
+        for name in names or self.params:
+            p = self.params.get(name)
+            if p is None:
+                continue
+            if name in names:
+                self.live.add(name)
+            rng = None if (mi.is_spectral and p.kind != "float") else value_range(
+                getattr(self, "m_" + name))
+            if rng is not None:        # stored in float32: compare with float32 bounds
+                lo, hi = (None if b is None else float(np.float32(b)) for b in (p.lo, p.hi))
+                check_value(self.name, name, rng[0], lo, hi, p.valid())
+                check_value(self.name, name, rng[1], lo, hi, p.valid())
+        self.update_lobes()
+
+    def off(self, name: str, value: float = 0.0) -> bool:
+        """True if parameter ``name`` is the constant ``value`` (0: a black colour
+        or a zero weight) and cannot change: not spatially varying, not
+        grad-enabled, never updated. Models use it to drop lobes that cannot matter."""
+        if name not in self.params or name in self.live:
+            return False
+        obj = getattr(self, "m_" + name)
+        if grad_enabled(obj):
+            return False
+        if isinstance(obj, mi.Object) and obj.is_spatially_varying():
+            return False
+        rng = value_range(obj)
+        return rng is not None and rng == (value, value)
+
+    # --- what a model provides -------------------------------------------------
     def has_diffuse(self) -> bool:
         return False
 
     def has_specular(self) -> bool:
         return False
+
+    def evaluate(self, si, active) -> SimpleNamespace:
+        return SimpleNamespace()
+
+    def f_diffuse(self, inp, si, wo):
+        raise NotImplementedError
+
+    def f_specular(self, inp, si, wo):
+        raise NotImplementedError
+
+    def lobe_weights(self, inp):
+        return 1.0, 1.0
+
+    def selection_weights(self, inp, si):
+        return mi.Float(1.0), mi.Float(1.0)
+
+    def sample_specular(self, inp, si, sample2):
+        raise NotImplementedError
+
+    def pdf_specular(self, inp, si, wo):
+        raise NotImplementedError
+
+    def albedo(self, inp, v):
+        """Single-scattering directional albedo of the compensated lobe per unit
+        colour, at direction v (local), for :mod:`.energy`."""
+        raise NotImplementedError
+
+    def albedo_average(self, inp):
+        """Its cosine-weighted hemispherical average."""
+        raise NotImplementedError
+
+    def ms_colour(self, inp):
+        """The per-bounce colour of the compensated lobe (see :func:`.energy.ms_colour`)."""
+        raise NotImplementedError
 
     def diffuse_sampling(self) -> str:
         """How the diffuse lobe is sampled: "cosine" (for lobes carrying a
@@ -169,37 +363,18 @@ class BRDF:
         give weights 1/cos theta_o of infinite variance)."""
         return "cosine"
 
-    def sample_diffuse(self, sample2):
-        if self.diffuse_sampling() == "uniform":
-            return mi.warp.square_to_uniform_hemisphere(sample2)
-        return mi.warp.square_to_cosine_hemisphere(sample2)
-
-    def pdf_diffuse(self, wo):
-        if self.diffuse_sampling() == "uniform":
-            return mi.warp.square_to_uniform_hemisphere_pdf(wo)
-        return mi.warp.square_to_cosine_hemisphere_pdf(wo)
-
     def lit_from_behind(self) -> bool:
         """True if eval() must see lights below the surface (cos_o <= 0), e.g.
-        the toon model's dark side; lobes() then zeroes what must be zero."""
+        the toon model's dark side in scanline mode; the lobes then zero what
+        must be zero."""
         return False
 
-    def lobe_weights(self):
-        return 1.0, 1.0
-
-    def selection_weights(self, si, active):
-        return mi.Float(1.0), mi.Float(1.0)
-
-    def sample_specular(self, si, sample2, active):
-        raise NotImplementedError
-
-    def pdf_specular(self, si, wo, active):
-        raise NotImplementedError
-
-    # --- flags -----------------------------------------------------------------
+    # --- lobes and flags ---------------------------------------------------------
     def update_lobes(self) -> None:
         """Declare exactly the lobes present: an absent lobe is never traced."""
         self.diffuse, self.specular = self.has_diffuse(), self.has_specular()
+        parent = self.specular if self.compensates == "specular" else self.diffuse
+        self.multiple = self.energy_compensation and parent
         components = []
         if self.diffuse:
             components.append(mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide)
@@ -213,105 +388,156 @@ class BRDF:
         self.m_components = components
         self.m_flags = flags
 
-    def parameters_changed(self, keys=[]):
-        self.update_lobes()
+    def enabled(self, ctx) -> Lobes:
+        """The lobes that exist and that ctx asks for."""
+        d = self.diffuse and ctx.is_enabled(mi.BSDFFlags.DiffuseReflection, self.diffuse_index)
+        s = self.specular and ctx.is_enabled(mi.BSDFFlags.GlossyReflection, self.specular_index)
+        return Lobes(d, s, self.multiple and (s if self.compensates == "specular" else d))
 
-    def enabled(self, ctx):
-        """(diffuse, specular) lobes that exist and that ctx asks for."""
-        d = self.diffuse and ctx.is_enabled(mi.BSDFFlags.DiffuseReflection,
-                                            self.diffuse_index)
-        s = self.specular and ctx.is_enabled(mi.BSDFFlags.GlossyReflection,
-                                             self.specular_index)
-        return d, s
+    def inputs(self, si, active) -> SimpleNamespace:
+        """Everything a call needs at ``si``, each texture evaluated once."""
+        inp = self.evaluate(si, active)
+        if self.multiple:
+            inp.e_i = self.albedo(inp, si.wi)                 # E(w_i)
+            inp.e_avg = self.albedo_average(inp)              # E_avg
+            inp.f_ms = energy.ms_colour(self.ms_colour(inp), inp.e_avg)
+        return inp
 
-    def specular_probability(self, si, use_d, use_s, active):
-        """Probability of sampling the glossy lobe: proportional to its weight."""
-        if not use_s:
-            return mi.Float(0.0)
-        if not use_d:
-            return mi.Float(1.0)
-        wd, ws = self.selection_weights(si, active)
-        total = wd + ws
-        return dr.select(total > 0, ws / dr.select(total > 0, total, 1.0), 0.5)
+    def f_multiple(self, inp, si, wo):
+        return energy.ms_lobe(inp.f_ms, inp.e_i, self.albedo(inp, wo), inp.e_avg,
+                              mi.Frame3f.cos_theta(wo))
+
+    def probabilities(self, inp, si, use: Lobes):
+        """(p_d, p_s, p_ms): each used lobe picked in proportion to its weight."""
+        count = sum(use)
+        if count <= 1:                     # nothing to choose: constants, not traced
+            return tuple(mi.Float(1.0 if u else 0.0) for u in use)
+        w_d, w_s = self.selection_weights(inp, si)
+        w_ms = mi.Float(0.0)
+        if use.multiple:
+            w = self.lobe_weights(inp)[0 if self.compensates == "diffuse" else 1]
+            w_ms = w * mean(inp.f_ms) * (1.0 - inp.e_i)
+        weights = [dr.select(u, w, 0.0) if u else mi.Float(0.0)
+                   for u, w in zip(use, (w_d, w_s, w_ms))]
+        total = weights[0] + weights[1] + weights[2]
+        ok = total > 0
+        inv = 1.0 / dr.select(ok, total, 1.0)
+        return tuple(dr.select(ok, w * inv, (1.0 / count) if u else 0.0)
+                     for u, w in zip(use, weights))
 
     # --- the BSDF interface --------------------------------------------------
     def sample(self, ctx, si, sample1, sample2, active=True):
-        use_d, use_s = self.enabled(ctx)
+        use = self.enabled(ctx)
         bs = dr.zeros(mi.BSDFSample3f)
         cos_i = mi.Frame3f.cos_theta(si.wi)
         active = mi.Bool(active) & (cos_i > 0)
-        if not (use_d or use_s):
-            return bs, mi.Spectrum(0.0)
-
-        p_s = self.specular_probability(si, use_d, use_s, active)
-        pick_s = mi.Bool(sample1 < p_s)
+        if not any(use):
+            return bs, self.spectrum(mi.UnpolarizedSpectrum(0.0))
+        inp = self.inputs(si, active)
+        p_d, p_s, _ = probs = self.probabilities(inp, si, use)
+        pick_d = mi.Bool(sample1 < p_d)
+        pick_s = ~pick_d & (sample1 < p_d + p_s) if use.multiple else ~pick_d
         if self.sampling == "cosine":
             wo = mi.warp.square_to_cosine_hemisphere(sample2)
-        elif use_d and use_s:
-            wo = dr.select(pick_s,
-                           self.sample_specular(si, sample2, active & pick_s),
-                           self.sample_diffuse(sample2))
-        elif use_s:
-            wo = self.sample_specular(si, sample2, active)
         else:
-            wo = self.sample_diffuse(sample2)
+            wo = mi.warp.square_to_cosine_hemisphere(sample2)   # diffuse and multiple
+            if use.diffuse and self.diffuse_sampling() == "uniform":
+                wo = dr.select(pick_d, mi.warp.square_to_uniform_hemisphere(sample2), wo)
+            if use.specular:
+                wo = dr.select(pick_s, self.sample_specular(inp, si, sample2), wo)
 
-        value, pdf = self.eval_pdf(ctx, si, wo, active)
+        value, pdf = self.lobes_eval(use, inp, si, wo, active), \
+            self.lobes_pdf(use, probs, inp, si, wo, active)
         active &= (pdf > 0) & (mi.Frame3f.cos_theta(wo) > 0)
         diffuse_t = mi.UInt32(+mi.BSDFFlags.DiffuseReflection)
         glossy_t = mi.UInt32(+mi.BSDFFlags.GlossyReflection)
+        glossy = ~pick_d if self.compensates == "specular" else pick_s
         bs.wo = dr.select(active, wo, 0.0)      # no NaN from inactive lanes either
         bs.pdf = dr.select(active, pdf, 0.0)
         bs.eta = 1.0
-        bs.sampled_type = dr.select(pick_s, glossy_t, diffuse_t)
-        bs.sampled_component = dr.select(pick_s, mi.UInt32(self.specular_index),
+        bs.sampled_type = dr.select(glossy, glossy_t, diffuse_t)
+        bs.sampled_component = dr.select(glossy, mi.UInt32(self.specular_index),
                                          mi.UInt32(self.diffuse_index))
         weight = value / dr.select(active, pdf, 1.0)
-        return bs, dr.select(active, weight, 0.0)
+        return bs, self.spectrum(dr.select(active, weight, 0.0))
 
     def eval(self, ctx, si, wo, active=True):
-        use_d, use_s = self.enabled(ctx)
+        use = self.enabled(ctx)
+        if not any(use):
+            return self.spectrum(mi.UnpolarizedSpectrum(0.0))
+        inp = self.inputs(si, active)
+        return self.spectrum(self.lobes_eval(use, inp, si, wo, active))
+
+    def pdf(self, ctx, si, wo, active=True):
+        use = self.enabled(ctx)
+        if not any(use):
+            return mi.Float(0.0)
+        inp = self.inputs(si, active)
+        return self.lobes_pdf(use, self.probabilities(inp, si, use), inp, si, wo, active)
+
+    def eval_pdf(self, ctx, si, wo, active=True):
+        use = self.enabled(ctx)
+        if not any(use):
+            return self.spectrum(mi.UnpolarizedSpectrum(0.0)), mi.Float(0.0)
+        inp = self.inputs(si, active)
+        return (self.spectrum(self.lobes_eval(use, inp, si, wo, active)),
+                self.lobes_pdf(use, self.probabilities(inp, si, use), inp, si, wo, active))
+
+    # --- the lobes, summed -------------------------------------------------------
+    def lobes_eval(self, use: Lobes, inp, si, wo, active):
         cos_i = mi.Frame3f.cos_theta(si.wi)
         cos_o = mi.Frame3f.cos_theta(wo)
         # A viewer or light below (or exactly on) the surface gets no reflection.
         active = mi.Bool(active) & (cos_i > 0)
         if not self.lit_from_behind():
             active &= cos_o > 0
-        f_d, f_s = self.lobes(si, wo, active)
-        w_d, w_s = self.lobe_weights()
-        if self.mode == "scanline":
-            f_d, f_s = clamp01(f_d), clamp01(f_s)
-        value = mi.Spectrum(0.0)
-        if use_d:
-            value += w_d * f_d
-        if use_s:
-            value += w_s * f_s
+        w_d, w_s = self.lobe_weights(inp)
+        clamp = clamp01 if self.mode == "scanline" else (lambda x: x)
+        value = mi.UnpolarizedSpectrum(0.0)
+        if use.diffuse:
+            value += w_d * clamp(self.f_diffuse(inp, si, wo))
+        if use.specular:
+            value += w_s * clamp(self.f_specular(inp, si, wo))
+        if use.multiple:                 # hdr only
+            value += (w_s if self.compensates == "specular" else w_d) \
+                * self.f_multiple(inp, si, wo)
         return dr.select(active, value, 0.0)
 
-    def pdf(self, ctx, si, wo, active=True):
-        use_d, use_s = self.enabled(ctx)
+    def lobes_pdf(self, use: Lobes, probs, inp, si, wo, active):
         cos_i = mi.Frame3f.cos_theta(si.wi)
         cos_o = mi.Frame3f.cos_theta(wo)
         active = mi.Bool(active) & (cos_i > 0) & (cos_o > 0)
+        cosine = mi.warp.square_to_cosine_hemisphere_pdf(wo)
         if self.sampling == "cosine":
-            return dr.select(active, mi.warp.square_to_cosine_hemisphere_pdf(wo), 0.0)
-        p_s = self.specular_probability(si, use_d, use_s, active)
+            return dr.select(active, cosine, 0.0)
+        p_d, p_s, p_ms = probs
         pdf = mi.Float(0.0)
-        if use_d:
-            pdf += (1.0 - p_s) * self.pdf_diffuse(wo)
-        if use_s:
-            pdf += p_s * self.pdf_specular(si, wo, active)
+        if use.diffuse:
+            pdf_d = (mi.warp.square_to_uniform_hemisphere_pdf(wo)
+                     if self.diffuse_sampling() == "uniform" else cosine)
+            pdf += p_d * pdf_d
+        if use.specular:
+            pdf += p_s * self.pdf_specular(inp, si, wo)
+        if use.multiple:
+            pdf += p_ms * cosine
         return dr.select(active, pdf, 0.0)
 
-    def eval_pdf(self, ctx, si, wo, active=True):
-        return self.eval(ctx, si, wo, active), self.pdf(ctx, si, wo, active)
+    @staticmethod
+    def spectrum(value):
+        """What eval/sample return: the value itself, or a depolarizing Mueller
+        matrix in polarized variants (as Mitsuba's ``diffuse`` does)."""
+        return mi.depolarizer(value) if mi.is_polarized else value
 
+    # --- description -------------------------------------------------------------
     def to_string(self):
         fields = ", ".join(f"{k}={v}" for k, v in self.describe().items())
         return f"{type(self).__name__}[mode={self.mode}, {fields}]"
 
     def describe(self) -> dict:
-        return {}
+        fields = {name: getattr(self, "m_" + name) for name in self.params}
+        if self.compensable:
+            fields["energy_compensation"] = self.energy_compensation
+        return fields
 
 
 # ----------------------------------------------------------------------------

@@ -86,11 +86,15 @@ is no diffuse lobe, with k = 1 (or m_S = 0) no specular one.
 """
 from __future__ import annotations
 
+from dataclasses import replace
+from types import SimpleNamespace
+
 import drjit as dr
 import mitsuba as mi
 
-from . import lambert, microfacet as mf
-from .base import BRDF, Reader, is_zero, mean
+from . import energy, lambert, microfacet as mf
+from .base import BRDF, Param, Reader, mean
+from .grid import Axis
 
 
 # ----------------------------------------------------------------------------
@@ -102,106 +106,146 @@ def specular(wi, wo, alpha, f0, distribution: str, geometry: str):
 
     (The lecture's scanline f_specular is m_S·D F G / (4 clamp(w_r·n)); the hdr
     BRDF m_S·D F G / (4 (w_r·n)(d·n)) times Mitsuba's cos(theta_o) is the same.)
+    Smith: D F G1(d) · G1(w_r)/(4 w_r·n), with G1/cos computed without a
+    division by the cosine (-> 0 at grazing). V-cavity: its own 1/(4 w_r·n)
+    growth at a grazing mirror pair, stopped at cos = ``COS_FLOOR`` (1e-12).
     """
     cos_i, cos_o = mi.Frame3f.cos_theta(wi), mi.Frame3f.cos_theta(wo)
     h = mf.half_vector(wi, wo)
-    cos_h, i_dot_h = mi.Frame3f.cos_theta(h), dr.dot(wi, h)
     d = mf.D[distribution](h, alpha)
-    f = mf.fresnel_schlick(f0, i_dot_h)
+    f = mf.fresnel_schlick(f0, dr.dot(wi, h))
     if geometry == "smith":
-        g = mf.g_smith(distribution, wi, wo, alpha)
+        g_over_4cos = mf.g1(distribution, wo, alpha) \
+            * mf.G1_OVER_COS[distribution](wi, alpha) * 0.25
     else:
-        g = mf.g_cook_torrance(cos_h, cos_i, cos_o, i_dot_h)
-    return d * f * g / (4.0 * dr.fmax(cos_i, mf.TINY))
+        g = mf.g_cook_torrance(mi.Frame3f.cos_theta(h), cos_i, cos_o, dr.dot(wi, h))
+        g_over_4cos = g / (4.0 * dr.fmax(cos_i, mf.COS_FLOOR))
+    return d * f * g_over_4cos
+
+
+MICROFACET_TYPE = {"beckmann": "Beckmann", "ggx": "GGX"}
+
+
+def sample_lobe(wi, sample2, alpha, distribution: str, visible: bool = True):
+    """A light direction for the specular lobe: sample m, the microfacet normal
+    (the visible normals of Beckmann and GGX with Mitsuba's
+    ``MicrofacetDistribution``, D(m) cos(theta_m) for Blinn), reflect w_r about it."""
+    if distribution == "blinn":
+        m = mf.sample_blinn(sample2, alpha)
+    else:
+        kind = getattr(mi.MicrofacetType, MICROFACET_TYPE[distribution])
+        m, _ = mi.MicrofacetDistribution(kind, alpha, visible).sample(wi, sample2)
+    return mi.reflect(wi, m)
+
+
+def pdf_lobe(wi, wo, alpha, distribution: str, visible: bool = True):
+    """Density of sample_lobe() at wo: pdf(m) / (4 wo·m), m the half vector."""
+    h = mf.half_vector(wi, wo)
+    o_dot_h = dr.dot(wo, h)
+    jacobian = 1.0 / (4.0 * dr.fmax(o_dot_h, mf.TINY))      # dm/dwo
+    if distribution == "blinn":
+        pdf_m = mf.pdf_blinn(h, alpha)
+    else:
+        kind = getattr(mi.MicrofacetType, MICROFACET_TYPE[distribution])
+        pdf_m = mi.MicrofacetDistribution(kind, alpha, visible).pdf(wi, h)
+    return dr.select(o_dot_h > 0, pdf_m * jacobian, 0.0)
 
 
 # ----------------------------------------------------------------------------
 #  The plugin
 # ----------------------------------------------------------------------------
 
-MICROFACET_TYPE = {"beckmann": "Beckmann", "ggx": "GGX"}
+# Energy compensation: E(mu, alpha) of each D x G, white (F = 1, m_S = 1).
+ALBEDO_AXES = (Axis("mu", 0.0, 1.0, 33, "sqrt"), Axis("alpha", 0.0, 1.0, 33, "sqrt"))
+
+
+def albedo_spec(distribution: str, geometry: str) -> energy.AlbedoSpec:
+    alpha = lambda a: dr.fmax(a, mf.ALPHA_MIN)
+    return energy.AlbedoSpec(
+        f"cook_torrance/{distribution}/{geometry}", ALBEDO_AXES,
+        f=lambda wi, wo, a: specular(wi, wo, alpha(a), 1.0, distribution, geometry),
+        sample=lambda wi, u, a: sample_lobe(wi, u, alpha(a), distribution),
+        pdf=lambda wi, wo, a: pdf_lobe(wi, wo, alpha(a), distribution))
 
 
 class CookTorrance(BRDF):
     name = "cook_torrance"
+    compensable = True
+    PARAMS = (
+        Param("diffuse_reflectance", 0.5),                                   # m_D
+        Param("specular_reflectance", 1.0),                                  # m_S
+        Param("k", 0.5, 0.0, 1.0, kind="float", role="weight"),              # diffuse weight
+        Param("f0", 0.04, 0.0, 1.0, kind="float", role="weight"),            # Schlick's F_0
+        Param("alpha", 0.3, 0.0, None, kind="scalar", role="shape", upper=1.0),  # rho
+    )
 
     def read(self, reader: Reader) -> None:
         self.distribution = reader.choice("distribution", "beckmann", mf.DISTRIBUTIONS)
         self.geometry = reader.choice("geometry", "cook_torrance", mf.GEOMETRIES)
-        self.m_diffuse = reader.texture("diffuse_reflectance", 0.5)      # m_D
-        self.m_specular = reader.texture("specular_reflectance", 1.0)    # m_S
-        self.m_k = reader.scalar("k", 0.5, 0.0, 1.0)                     # diffuse weight
-        self.m_f0 = reader.scalar("f0", 0.04, 0.0, 1.0)                  # Schlick's F_0
-        alpha_max = 1.0 if self.distribution == "blinn" else None        # Blinn: 2/rho²-2 >= 0
-        self.m_alpha = reader.texture("alpha", 0.3, 0.0, alpha_max)      # rho
-        self.sample_visible = bool(reader.props.get("sample_visible", True))
+        self.sample_visible = reader.boolean("sample_visible", True)
+        for p in self.PARAMS:
+            if p.name == "alpha" and self.distribution == "blinn":
+                p = replace(p, hi=1.0)                       # Blinn: 2/rho² - 2 >= 0
+            self.read_param(reader, p)
 
-    def traverse(self, cb):
-        flags = mi.ParamFlags.Differentiable
-        cb.put("diffuse_reflectance", self.m_diffuse, flags)
-        cb.put("specular_reflectance", self.m_specular, flags)
-        cb.put("alpha", self.m_alpha, flags)
-        cb.put("k", self.m_k, flags)
-        cb.put("f0", self.m_f0, flags)
+    @classmethod
+    def albedo_specs(cls) -> list[energy.AlbedoSpec]:
+        return [albedo_spec(d, g) for d in mf.DISTRIBUTIONS for g in mf.GEOMETRIES]
 
     # --- lobes ---------------------------------------------------------------
-    def k_value(self) -> float:
-        return float(self.m_k[0])
-
     def has_diffuse(self) -> bool:
-        return self.k_value() > 0.0 and not is_zero(self.m_diffuse)
+        return not (self.off("k", 0.0) or self.off("diffuse_reflectance"))
 
     def has_specular(self) -> bool:
-        return self.k_value() < 1.0 and not is_zero(self.m_specular)
+        return not (self.off("k", 1.0) or self.off("specular_reflectance"))
 
-    def lobe_weights(self):
+    def evaluate(self, si, active):
+        inp = SimpleNamespace(alpha=dr.fmax(self.m_alpha.eval_1(si, active), mf.ALPHA_MIN))
+        if self.diffuse:
+            inp.m_d = self.m_diffuse_reflectance.eval(si, active)
+        if self.specular:
+            inp.m_s = self.m_specular_reflectance.eval(si, active)
+        return inp
+
+    def lobe_weights(self, inp):
         return self.m_k, 1.0 - self.m_k
 
-    def alpha(self, si, active):
-        return dr.fmax(self.m_alpha.eval_1(si, active), mf.ALPHA_MIN)
+    def f_diffuse(self, inp, si, wo):
+        return lambert.f(inp.m_d, mi.Frame3f.cos_theta(wo), self.mode)
 
-    def lobes(self, si, wo, active):
-        f_d = mi.Spectrum(0.0)
-        f_s = mi.Spectrum(0.0)
+    def f_specular(self, inp, si, wo):
+        return inp.m_s * specular(si.wi, wo, inp.alpha, self.m_f0,
+                                  self.distribution, self.geometry)
+
+    def selection_weights(self, inp, si):
+        w_d = w_s = mi.Float(0.0)
         if self.diffuse:
-            m_d = self.m_diffuse.eval(si, active)
-            f_d = lambert.f(m_d, mi.Frame3f.cos_theta(wo), self.mode)
+            w_d = self.m_k * lambert.albedo(mean(inp.m_d), self.mode)
         if self.specular:
-            m_s = self.m_specular.eval(si, active)
-            f_s = m_s * specular(si.wi, wo, self.alpha(si, active), self.m_f0,
-                                 self.distribution, self.geometry)
-        return f_d, f_s
-
-    def selection_weights(self, si, active):
-        w_d = self.m_k * lambert.albedo(mean(self.m_diffuse.eval(si, active)), self.mode)
-        fresnel = mf.fresnel_schlick(self.m_f0, mi.Frame3f.cos_theta(si.wi))
-        w_s = (1.0 - self.m_k) * mean(self.m_specular.eval(si, active)) * fresnel
+            fresnel = mf.fresnel_schlick(self.m_f0, mi.Frame3f.cos_theta(si.wi))
+            w_s = (1.0 - self.m_k) * mean(inp.m_s) * fresnel
         return w_d, w_s
 
     # --- specular sampling ----------------------------------------------------
-    def mitsuba_distribution(self, si, active):
-        kind = getattr(mi.MicrofacetType, MICROFACET_TYPE[self.distribution])
-        return mi.MicrofacetDistribution(kind, self.alpha(si, active), self.sample_visible)
+    def sample_specular(self, inp, si, sample2):
+        return sample_lobe(si.wi, sample2, inp.alpha, self.distribution, self.sample_visible)
 
-    def sample_specular(self, si, sample2, active):
-        # Sample m, the microfacet normal, then reflect the viewer about it.
-        if self.distribution == "blinn":
-            m = mf.sample_blinn(sample2, self.alpha(si, active))
-        else:
-            m, _ = self.mitsuba_distribution(si, active).sample(si.wi, sample2)
-        return mi.reflect(si.wi, m)
+    def pdf_specular(self, inp, si, wo):
+        return pdf_lobe(si.wi, wo, inp.alpha, self.distribution, self.sample_visible)
 
-    def pdf_specular(self, si, wo, active):
-        h = mf.half_vector(si.wi, wo)
-        jacobian = 1.0 / (4.0 * dr.fmax(dr.dot(wo, h), mf.TINY))   # dm/dwo
-        if self.distribution == "blinn":
-            pdf_m = mf.pdf_blinn(h, self.alpha(si, active))
-        else:
-            pdf_m = self.mitsuba_distribution(si, active).pdf(si.wi, h)
-        return dr.select(dr.dot(wo, h) > 0, pdf_m * jacobian, 0.0)
+    # --- energy compensation ----------------------------------------------------
+    def table(self) -> energy.AlbedoTable:
+        return energy.table(albedo_spec(self.distribution, self.geometry))
+
+    def albedo(self, inp, v):
+        return self.table()(v, inp.alpha)
+
+    def albedo_average(self, inp):
+        return self.table().average(inp.alpha)
+
+    def ms_colour(self, inp):
+        return inp.m_s * mf.fresnel_average(self.m_f0)
 
     def describe(self) -> dict:
         return {"distribution": self.distribution, "geometry": self.geometry,
-                "k": self.m_k, "f0": self.m_f0, "alpha": self.m_alpha,
-                "diffuse_reflectance": self.m_diffuse,
-                "specular_reflectance": self.m_specular}
+                **BRDF.describe(self)}

@@ -25,8 +25,8 @@ and n the normal, returned as is by ``eval`` (it carries the cosine already)::
     scanline:  f_r = clamp01(m_D · clamp(d·n))
     hdr:       f_r = m_D / pi,   eval = m_D / pi · cos(theta_o)
 
-Sampling: cosine-weighted hemisphere. With ``reflectance`` 0 the plugin has no
-lobe at all. A viewer or light below the surface gets no reflection.
+Sampling: cosine-weighted hemisphere. With ``reflectance`` 0 (a constant, not
+differentiated, never updated) the plugin has no lobe at all. A viewer or light below the surface gets no reflection.
 
 .. code-block:: xml
 
@@ -37,10 +37,12 @@ lobe at all. A viewer or light below the surface gets no reflection.
 """
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import drjit as dr
 import mitsuba as mi
 
-from .base import BRDF, Reader, is_zero
+from .base import BRDF, Param
 
 
 # ----------------------------------------------------------------------------
@@ -67,19 +69,13 @@ def albedo(m_d, mode: str):
 
 class Lambert(BRDF):
     name = "lambert"
-
-    def read(self, reader: Reader) -> None:
-        self.m_reflectance = reader.texture("reflectance", 0.5)   # m_D
+    PARAMS = (Param("reflectance", 0.5),)                   # m_D
 
     def has_diffuse(self) -> bool:
-        return not is_zero(self.m_reflectance)
+        return not self.off("reflectance")
 
-    def traverse(self, cb):
-        cb.put("reflectance", self.m_reflectance, mi.ParamFlags.Differentiable)
+    def evaluate(self, si, active):
+        return SimpleNamespace(m_d=self.m_reflectance.eval(si, active))
 
-    def lobes(self, si, wo, active):
-        m_d = self.m_reflectance.eval(si, active)
-        return f(m_d, mi.Frame3f.cos_theta(wo), self.mode), mi.Spectrum(0.0)
-
-    def describe(self) -> dict:
-        return {"reflectance": self.m_reflectance}
+    def f_diffuse(self, inp, si, wo):
+        return f(inp.m_d, mi.Frame3f.cos_theta(wo), self.mode)

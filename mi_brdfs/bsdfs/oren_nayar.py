@@ -97,12 +97,14 @@ the plugin has no lobe. A viewer or light below the surface gets no reflection.
 from __future__ import annotations
 
 import math
+from types import SimpleNamespace
 
 import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from .base import BRDF, Reader, is_zero
+from .base import BRDF, Param, Reader
+from .grid import Axis, Grid
 
 METHODS = ("exact", "table")
 SIGMA_MAX = 0.5 * math.pi          # σ in [0, π/2]
@@ -162,20 +164,55 @@ def table_values(res: int) -> np.ndarray:
     return (sin_a * tan_b).ravel()
 
 
-def table_lookup(table, res: int, cos_i, cos_o):
-    """Bilinear interpolation of the table at p = d·n (cos_o), q = ω_r·n (cos_i)."""
-    def cell(c):
-        x = dr.fmin(dr.fmax(c, 0.0), 1.0) * (res - 1)
-        i = dr.minimum(mi.UInt32(x), res - 2)               # the cell's lower node
-        return i, x - mi.Float(i)
-    i, fx = cell(cos_o)
-    j, fy = cell(cos_i)
-    k = i * res + j
-    t00 = dr.gather(mi.Float, table, k)
-    t01 = dr.gather(mi.Float, table, k + 1)
-    t10 = dr.gather(mi.Float, table, k + res)
-    t11 = dr.gather(mi.Float, table, k + res + 1)
-    return dr.lerp(dr.lerp(t00, t01, fy), dr.lerp(t10, t11, fy), fx)
+def table_grid(res: int) -> Grid:
+    """The table as a :class:`.grid.Grid` over (p, q) = (d·n, ω_r·n)."""
+    axes = (Axis("p", 0.0, 1.0, res), Axis("q", 0.0, 1.0, res))
+    return Grid(axes, table_values(res).reshape(res, res))
+
+
+# ----------------------------------------------------------------------------
+#  The energy-preserving Oren-Nayar (EON), for energy_compensation
+# ----------------------------------------------------------------------------
+
+FON_C1 = 0.5 - 2.0 / (3.0 * math.pi)          # Fujii's A = 1/(1 + C1 r)
+FON_C2 = 2.0 / 3.0 - 28.0 / (15.0 * math.pi)  # E_avg = A (1 + C2 r)
+
+
+def eon_roughness(sigma):
+    """EON's roughness r from the lecture's σ: r = B(σ)/A(σ), the ratio of the
+    retro-reflective term to the Lambertian one in the lecture's model (Fujii's
+    mixing ratio σ'); σ in [0, π/2] maps to r in [0, 0.776]."""
+    a, b = a_b(sigma)
+    return b / a
+
+
+def fon(m_d, r, wi, wo):
+    """Fujii's Oren-Nayar (FON) in eval convention: m_D/π A (1 + r s/t) cos θ_o,
+    s = ω_i·ω_o - μ_i μ_o, t = max(μ_i, μ_o) where s > 0 (else 1), A = 1/(1 + C1 r).
+    Written as A (μ_o + r s μ_o/t) with μ_o/t <= 1: finite at grazing."""
+    mu_i, mu_o = dr.fmax(wi.z, 0.0), dr.fmax(wo.z, 0.0)
+    s = wi.x * wo.x + wi.y * wo.y                      # = ω_i·ω_o - μ_i μ_o, exactly
+    t = dr.fmax(mu_i, mu_o)
+    ratio = dr.select(s > 0, mu_o / dr.select(t > 0, t, 1.0), mu_o)    # μ_o / t
+    a = 1.0 / (1.0 + FON_C1 * r)
+    return m_d * (dr.inv_pi * a * (mu_o + r * s * ratio))
+
+
+def fon_albedo(mu, r):
+    """E_FON(μ) = A + (B/π) G(μ), B = r A, with (Portsmouth et al. 2025)
+    G = S (acos μ - S μ) + 2/3 ((S/μ)(1 - S³) - S), S = sqrt(1 - μ²);
+    (S/μ)(1 - S³) written as S μ (1 + S + S²)/(1 + S) (finite at μ = 0)."""
+    mu = dr.fmin(dr.fmax(mu, 0.0), 1.0)
+    s = dr.sqrt(dr.fmax(1.0 - dr.square(mu), 0.0))
+    g = s * (dr.acos(mu) - s * mu) \
+        + (2.0 / 3.0) * (s * mu * (1.0 + s + dr.square(s)) / (1.0 + s) - s)
+    a = 1.0 / (1.0 + FON_C1 * r)
+    return a * (1.0 + r * dr.inv_pi * g)
+
+
+def fon_albedo_average(r):
+    """The cosine-weighted average of E_FON: A (1 + C2 r)."""
+    return (1.0 + FON_C2 * r) / (1.0 + FON_C1 * r)
 
 
 # ----------------------------------------------------------------------------
@@ -184,46 +221,62 @@ def table_lookup(table, res: int, cos_i, cos_o):
 
 class OrenNayar(BRDF):
     name = "oren_nayar"
+    compensable = True
+    compensates = "diffuse"
+    PARAMS = (Param("reflectance", 0.5),                                          # m_D
+              Param("sigma", 0.3, 0.0, SIGMA_MAX, kind="scalar", role="shape"))   # σ
 
     def read(self, reader: Reader) -> None:
-        self.m_reflectance = reader.texture("reflectance", 0.5)                # m_D
-        self.m_sigma = reader.texture("sigma", 0.3, 0.0, SIGMA_MAX)            # σ
+        BRDF.read(self, reader)        # (no super(): plugin classes are rebuilt per variant)
         self.method = reader.choice("method", "exact", METHODS)
         self.table_resolution = None
-        self.m_table = None                 # T(p, q) = sin α tan β, flat, row = p
+        self.table = None                   # T(p, q) = sin α tan β
         if "table_resolution" in reader.props and self.method != "table":
             raise reader.error("table_resolution", reader.props["table_resolution"],
                                'only with method="table"')
         if self.method == "table":
+            if self.energy_compensation:
+                raise reader.error("method", "table", '"exact" with energy_compensation '
+                                   "(EON has no table of the lecture's sin α tan β)")
             res = reader.props.get("table_resolution", TABLE_DEFAULT)
             if not isinstance(res, int) or isinstance(res, bool):
                 raise reader.error("table_resolution", res,
                                    f"an integer in [{TABLE_MIN}, {TABLE_MAX}]")
             reader.check("table_resolution", res, TABLE_MIN, TABLE_MAX)
             self.table_resolution = res
-            self.m_table = mi.Float(table_values(res))
+            self.table = table_grid(res)
 
     def has_diffuse(self) -> bool:
-        return not is_zero(self.m_reflectance)
+        return not self.off("reflectance")
 
-    def traverse(self, cb):
-        cb.put("reflectance", self.m_reflectance, mi.ParamFlags.Differentiable)
-        cb.put("sigma", self.m_sigma, mi.ParamFlags.Differentiable)
-
-    def lobes(self, si, wo, active):
-        m_d = self.m_reflectance.eval(si, active)
+    def evaluate(self, si, active):
         sigma = self.m_sigma.eval_1(si, active)
+        return SimpleNamespace(m_d=self.m_reflectance.eval(si, active), sigma=sigma,
+                               r=eon_roughness(sigma))
+
+    def f_diffuse(self, inp, si, wo):
+        if self.energy_compensation:               # EON: FON + the base's multiple scattering
+            return fon(inp.m_d, inp.r, si.wi, wo)
         cos_i, cos_o = mi.Frame3f.cos_theta(si.wi), mi.Frame3f.cos_theta(wo)
         if self.method == "table":
-            sa_tb = table_lookup(self.m_table, self.table_resolution, cos_i, cos_o)
+            sa_tb = self.table(cos_o, cos_i)
         else:
             sa_tb = sin_alpha_tan_beta(cos_i, cos_o)
         g = g_azimuth(si.wi, wo)
-        return oren_nayar(m_d, sigma, g, sa_tb, cos_o, self.mode), mi.Spectrum(0.0)
+        return oren_nayar(inp.m_d, inp.sigma, g, sa_tb, cos_o, self.mode)
+
+    # --- energy compensation (EON) ------------------------------------------------
+    def albedo(self, inp, v):
+        return fon_albedo(mi.Frame3f.cos_theta(v), inp.r)
+
+    def albedo_average(self, inp):
+        return fon_albedo_average(inp.r)
+
+    def ms_colour(self, inp):
+        return inp.m_d
 
     def describe(self) -> dict:
-        fields = {"reflectance": self.m_reflectance, "sigma": self.m_sigma,
-                  "method": self.method}
+        fields = {**BRDF.describe(self), "method": self.method}
         if self.method == "table":
             fields["table_resolution"] = self.table_resolution
         return fields

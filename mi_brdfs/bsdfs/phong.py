@@ -75,11 +75,14 @@ is no diffuse lobe, with m_S = 0 no specular one.
 """
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import drjit as dr
 import mitsuba as mi
 
-from . import lambert, powercos
-from .base import BRDF, Reader, is_zero, mean
+from . import energy, lambert, powercos
+from .base import BRDF, Param, mean
+from .grid import Axis
 
 MAX_EXPONENT = 1e8     # lobe ~1e-4 rad wide, still 1000x the float32 direction spacing
 
@@ -133,63 +136,75 @@ def pdf_lobe(wi, wo, gamma):
 #  The plugin
 # ----------------------------------------------------------------------------
 
+# Energy compensation: E(mu, gamma) of the hdr lobe (m_S = 1), over log(1 + gamma).
+ALBEDO_AXES = (Axis("mu", 0.0, 1.0, 33, "sqrt"), Axis("exponent", 0.0, MAX_EXPONENT, 49, "log1p"))
+
+
 class Phong(BRDF):
-    """Also the base of :class:`mi_brdfs.blinn.Blinn`, which differs only by
+    """Also the base of :class:`mi_brdfs.bsdfs.blinn.Blinn`, which differs only by
     the formulas below (its module's functions of the same names)."""
     name = "phong"
+    compensable = True
+    PARAMS = (
+        Param("diffuse_reflectance", 0.5),                                    # m_D
+        Param("specular_reflectance", 0.5),                                   # m_S
+        Param("exponent", 100.0, 0.0, MAX_EXPONENT, kind="scalar", role="shape"),  # gamma
+    )
     specular_scanline = staticmethod(specular_scanline)
     specular_hdr = staticmethod(specular_hdr)
     specular_weight = staticmethod(specular_weight)
     sample_lobe = staticmethod(sample_lobe)
     pdf_lobe = staticmethod(pdf_lobe)
 
-    def read(self, reader: Reader) -> None:
-        self.m_diffuse = reader.texture("diffuse_reflectance", 0.5)               # m_D
-        self.m_specular = reader.texture("specular_reflectance", 0.5)             # m_S
-        self.m_exponent = reader.texture("exponent", 100.0, 0.0, MAX_EXPONENT)    # gamma
-
-    def traverse(self, cb):
-        flags = mi.ParamFlags.Differentiable
-        cb.put("diffuse_reflectance", self.m_diffuse, flags)
-        cb.put("specular_reflectance", self.m_specular, flags)
-        cb.put("exponent", self.m_exponent, flags)
+    @classmethod
+    def albedo_specs(cls) -> list[energy.AlbedoSpec]:
+        return [energy.AlbedoSpec(cls.name, ALBEDO_AXES, f=cls.specular_hdr,
+                                  sample=cls.sample_lobe, pdf=cls.pdf_lobe)]
 
     # --- lobes ---------------------------------------------------------------
     def has_diffuse(self) -> bool:
-        return not is_zero(self.m_diffuse)
+        return not self.off("diffuse_reflectance")
 
     def has_specular(self) -> bool:
-        return not is_zero(self.m_specular)
+        return not self.off("specular_reflectance")
 
-    def gamma(self, si, active):
-        return self.m_exponent.eval_1(si, active)
-
-    def lobes(self, si, wo, active):
-        f_d = mi.Spectrum(0.0)
-        f_s = mi.Spectrum(0.0)
+    def evaluate(self, si, active):
+        inp = SimpleNamespace(gamma=self.m_exponent.eval_1(si, active))
         if self.diffuse:
-            m_d = self.m_diffuse.eval(si, active)
-            f_d = lambert.f(m_d, mi.Frame3f.cos_theta(wo), self.mode)
+            inp.m_d = self.m_diffuse_reflectance.eval(si, active)
         if self.specular:
-            m_s = self.m_specular.eval(si, active)
-            spec = self.specular_scanline if self.mode == "scanline" else self.specular_hdr
-            f_s = m_s * spec(si.wi, wo, self.gamma(si, active))
-        return f_d, f_s
+            inp.m_s = self.m_specular_reflectance.eval(si, active)
+        return inp
 
-    def selection_weights(self, si, active):
-        w_d = mean(self.m_diffuse.eval(si, active))
-        w_s = mean(self.m_specular.eval(si, active)) \
-            * self.specular_weight(self.gamma(si, active), self.mode)
+    def f_diffuse(self, inp, si, wo):
+        return lambert.f(inp.m_d, mi.Frame3f.cos_theta(wo), self.mode)
+
+    def f_specular(self, inp, si, wo):
+        spec = self.specular_scanline if self.mode == "scanline" else self.specular_hdr
+        return inp.m_s * spec(si.wi, wo, inp.gamma)
+
+    def selection_weights(self, inp, si):
+        w_d = mean(inp.m_d) if self.diffuse else mi.Float(0.0)
+        w_s = (mean(inp.m_s) * self.specular_weight(inp.gamma, self.mode)
+               if self.specular else mi.Float(0.0))
         return w_d, w_s
 
     # --- specular sampling ----------------------------------------------------
-    def sample_specular(self, si, sample2, active):
-        return self.sample_lobe(si.wi, sample2, self.gamma(si, active))
+    def sample_specular(self, inp, si, sample2):
+        return self.sample_lobe(si.wi, sample2, inp.gamma)
 
-    def pdf_specular(self, si, wo, active):
-        return self.pdf_lobe(si.wi, wo, self.gamma(si, active))
+    def pdf_specular(self, inp, si, wo):
+        return self.pdf_lobe(si.wi, wo, inp.gamma)
 
-    def describe(self) -> dict:
-        return {"exponent": self.m_exponent,
-                "diffuse_reflectance": self.m_diffuse,
-                "specular_reflectance": self.m_specular}
+    # --- energy compensation ----------------------------------------------------
+    def table(self) -> energy.AlbedoTable:
+        return energy.table(self.albedo_specs()[0])
+
+    def albedo(self, inp, v):
+        return self.table()(v, inp.gamma)
+
+    def albedo_average(self, inp):
+        return self.table().average(inp.gamma)
+
+    def ms_colour(self, inp):
+        return inp.m_s

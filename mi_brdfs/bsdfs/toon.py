@@ -123,11 +123,14 @@ glossy flags), so integrators sample the lights for them.
 """
 from __future__ import annotations
 
+import math
+from types import SimpleNamespace
+
 import drjit as dr
 import mitsuba as mi
 
 from . import microfacet as mf
-from .base import BRDF, Reader, is_zero, mean
+from .base import BRDF, Param, Reader, mean
 
 SPECULAR_MODELS = ("phong", "blinn")
 CONE_MIN = 1e-4            # smallest 1 - cos(half-angle) of the sampling cone
@@ -203,67 +206,53 @@ def cone_pdf(c, k):
 
 DIFFUSE_STEP = ("diffuse_reflectance", "diffuse_shade", "diffuse_threshold")
 SPECULAR_STEP = ("specular_reflectance", "specular_shade", "specular_threshold")
+HDR_SCALE = 1.0 / (2.0 * math.pi)     # hdr: a constant colour c reflects c over the hemisphere
 
 
 class Toon(BRDF):
     name = "toon"
+    reciprocal = False
+    PARAMS = (
+        Param("diffuse_reflectance", 0.8),                                       # m_D1
+        Param("diffuse_shade", 0.2),                                             # m_D2
+        Param("diffuse_threshold", 0.5, -1.0, 1.0, kind="scalar", role="shape"),   # t_D
+        Param("specular_reflectance", 1.0),                                      # m_S1
+        Param("specular_shade", 0.0),                                            # m_S2
+        Param("specular_threshold", 0.9, -1.0, 1.0, kind="scalar", role="shape"),  # t_S
+        Param("smoothness", 0.0, 0.0, 2.0, kind="float", role="shape"),          # band width w
+        Param("diffuse_ramp", 0.0),                                              # f_mD
+        Param("specular_ramp", 0.0),                                             # f_mS
+    )
 
     def read(self, reader: Reader) -> None:
         props = reader.props
         self.specular_model = reader.choice("specular_model", "phong", SPECULAR_MODELS)
-        self.m_diffuse_ramp = self.read_ramp(reader, "diffuse_ramp", DIFFUSE_STEP)
-        self.m_specular_ramp = self.read_ramp(reader, "specular_ramp", SPECULAR_STEP)
-        if self.m_diffuse_ramp is None:
-            self.m_d1 = reader.texture("diffuse_reflectance", 0.8)              # m_D1
-            self.m_d2 = reader.texture("diffuse_shade", 0.2)                    # m_D2
-            self.m_td = reader.texture("diffuse_threshold", 0.5, -1.0, 1.0)     # t_D
-        if self.m_specular_ramp is None:
-            self.m_s1 = reader.texture("specular_reflectance", 1.0)             # m_S1
-            self.m_s2 = reader.texture("specular_shade", 0.0)                   # m_S2
-            self.m_ts = reader.texture("specular_threshold", 0.9, -1.0, 1.0)    # t_S
-        both_ramps = self.m_diffuse_ramp is not None and self.m_specular_ramp is not None
-        if both_ramps and "smoothness" in props:
+        decl = {p.name: p for p in self.PARAMS}
+        ramps = {}
+        for ramp, replaced in (("diffuse_ramp", DIFFUSE_STEP), ("specular_ramp", SPECULAR_STEP)):
+            ramps[ramp] = ramp in props
+            for other in replaced:
+                if ramps[ramp] and other in props:
+                    raise reader.error(other, props[other], f"not with {ramp} (the ramp "
+                                       "replaces the colours and threshold)")
+            setattr(self, "m_" + ramp, None)
+            for name in ((ramp,) if ramps[ramp] else replaced):
+                self.read_param(reader, decl[name])
+        if all(ramps.values()) and "smoothness" in props:
             raise reader.error("smoothness", props["smoothness"],
                                "not with both diffuse_ramp and specular_ramp (no step to smooth)")
-        self.m_smoothness = reader.scalar("smoothness", 0.0, 0.0, 2.0)         # band width w
-
-    @staticmethod
-    def read_ramp(reader: Reader, name: str, replaced: tuple[str, ...]):
-        """The optional ramp texture; it replaces the lobe's two colours and threshold."""
-        if name not in reader.props:
-            return None
-        for other in replaced:
-            if other in reader.props:
-                raise reader.error(other, reader.props[other],
-                                   f"not with {name} (the ramp replaces the colours and threshold)")
-        return reader.texture(name, 0.0)
-
-    def traverse(self, cb):
-        flags = mi.ParamFlags.Differentiable
-        if self.m_diffuse_ramp is None:
-            cb.put("diffuse_reflectance", self.m_d1, flags)
-            cb.put("diffuse_shade", self.m_d2, flags)
-            cb.put("diffuse_threshold", self.m_td, flags)
-        else:
-            cb.put("diffuse_ramp", self.m_diffuse_ramp, flags)
-        if self.m_specular_ramp is None:
-            cb.put("specular_reflectance", self.m_s1, flags)
-            cb.put("specular_shade", self.m_s2, flags)
-            cb.put("specular_threshold", self.m_ts, flags)
-        else:
-            cb.put("specular_ramp", self.m_specular_ramp, flags)
-        cb.put("smoothness", self.m_smoothness, flags)
+        self.read_param(reader, decl["smoothness"])
 
     # --- lobes ---------------------------------------------------------------
     def has_diffuse(self) -> bool:
         if self.m_diffuse_ramp is not None:
-            return not is_zero(self.m_diffuse_ramp)
-        return not (is_zero(self.m_d1) and is_zero(self.m_d2))
+            return not self.off("diffuse_ramp")
+        return not (self.off("diffuse_reflectance") and self.off("diffuse_shade"))
 
     def has_specular(self) -> bool:
         if self.m_specular_ramp is not None:
-            return not is_zero(self.m_specular_ramp)
-        return not (is_zero(self.m_s1) and is_zero(self.m_s2))
+            return not self.off("specular_ramp")
+        return not (self.off("specular_reflectance") and self.off("specular_shade"))
 
     def diffuse_sampling(self) -> str:
         # The toon diffuse value carries no cos theta_o: sample it uniformly
@@ -271,82 +260,87 @@ class Toon(BRDF):
         return "uniform"
 
     def lit_from_behind(self) -> bool:
-        return True          # the dark side (m_D2) faces lights below the surface
+        # The scan-line dark side (m_D2) faces lights below the surface; in a
+        # path tracer the surface is opaque and light from below never reaches it.
+        return self.mode == "scanline"
 
-    def ramp(self, tex, si, c, active):
+    def evaluate(self, si, active):
+        inp = SimpleNamespace()
+        if self.diffuse and self.m_diffuse_ramp is None:
+            inp.m_d1 = self.m_diffuse_reflectance.eval(si, active)
+            inp.m_d2 = self.m_diffuse_shade.eval(si, active)
+            inp.t_d = self.m_diffuse_threshold.eval_1(si, active)
+        if self.specular and self.m_specular_ramp is None:
+            inp.m_s1 = self.m_specular_reflectance.eval(si, active)
+            inp.m_s2 = self.m_specular_shade.eval(si, active)
+            inp.t_s = self.m_specular_threshold.eval_1(si, active)
+            inp.k = cone_opening(inp.t_s - 0.5 * self.m_smoothness, self.specular_model)
+            # solid angle of the highlight: the cone (phong), ~4x the half-vector cone (blinn)
+            scale = 1.0 if self.specular_model == "phong" else 4.0
+            inp.omega = dr.fmin(2.0 * dr.pi * inp.k * scale, 2.0 * dr.pi)
+        return inp
+
+    def ramp(self, tex, si, c):
         lookup = mi.SurfaceInteraction3f(si)
         lookup.uv = ramp_uv(c)
-        return tex.eval(lookup, active)
+        return tex.eval(lookup)
 
-    def f_diffuse(self, si, cos_o, active):
-        if self.m_diffuse_ramp is not None:
-            return self.ramp(self.m_diffuse_ramp, si, cos_o, active)
-        return two_tone(cos_o, self.m_td.eval_1(si, active), self.m_smoothness,
-                        self.m_d1.eval(si, active), self.m_d2.eval(si, active))
+    def scale(self):
+        return 1.0 if self.mode == "scanline" else HDR_SCALE
 
-    def f_specular(self, si, c, active):
-        if self.m_specular_ramp is not None:
-            return self.ramp(self.m_specular_ramp, si, c, active)
-        return two_tone(c, self.m_ts.eval_1(si, active), self.m_smoothness,
-                        self.m_s1.eval(si, active), self.m_s2.eval(si, active))
-
-    def lobes(self, si, wo, active):
+    def f_diffuse(self, inp, si, wo):
         cos_o = mi.Frame3f.cos_theta(wo)
-        f_d = mi.Spectrum(0.0)
-        f_s = mi.Spectrum(0.0)
-        if self.diffuse:
-            f_d = self.f_diffuse(si, cos_o, active)
-        if self.specular:
-            c = specular_cosine(si.wi, wo, self.specular_model)
-            lit = active & (cos_o > 0)                  # no highlight from behind
-            f_s = dr.select(lit, self.f_specular(si, c, lit), 0.0)
-        return f_d, f_s
+        if self.m_diffuse_ramp is not None:
+            colour = self.ramp(self.m_diffuse_ramp, si, cos_o)
+        else:
+            colour = two_tone(cos_o, inp.t_d, self.m_smoothness, inp.m_d1, inp.m_d2)
+        return colour * self.scale()
 
-    # --- lobe selection: the lobes' hemispherical integrals (hdr values) -------
-    def ramp_weight(self, tex, si, active):
+    def f_specular(self, inp, si, wo):
+        c = specular_cosine(si.wi, wo, self.specular_model)
+        if self.m_specular_ramp is not None:
+            colour = self.ramp(self.m_specular_ramp, si, c)
+        else:
+            colour = two_tone(c, inp.t_s, self.m_smoothness, inp.m_s1, inp.m_s2)
+        lit = mi.Frame3f.cos_theta(wo) > 0               # no highlight from behind
+        return dr.select(lit, colour * self.scale(), 0.0)
+
+    # --- lobe selection: the lobes' hemispherical integrals ------------------------
+    def ramp_weight(self, tex, si):
         """2π times the ramp's mean at the cosines 0, 1/2 and 1."""
         total = mi.Float(0.0)
         for c in (0.0, 0.5, 1.0):
-            total += mean(self.ramp(tex, si, mi.Float(c), active))
+            total += mean(self.ramp(tex, si, mi.Float(c)))
         return 2.0 * dr.pi * total / 3.0
 
-    def cone_opening(self, si, active):
-        t_lo = self.m_ts.eval_1(si, active) - 0.5 * self.m_smoothness
-        return cone_opening(t_lo, self.specular_model)
-
-    def cone_probability(self, si, active):
+    def cone_probability(self, inp):
         """Probability of the highlight cone within the specular lobe (the rest:
         the uniform hemisphere, for m_S2 or a ramp)."""
         if self.m_specular_ramp is not None:
             return mi.Float(0.0)
-        k = self.cone_opening(si, active)
-        # solid angle of the highlight: the cone (phong), ~4x the half-vector cone (blinn)
-        omega = 2.0 * dr.pi * k * (1.0 if self.specular_model == "phong" else 4.0)
-        w_cone = mean(self.m_s1.eval(si, active)) * dr.fmin(omega, 2.0 * dr.pi)
-        w_rest = mean(self.m_s2.eval(si, active)) * 2.0 * dr.pi
+        w_cone = mean(inp.m_s1) * inp.omega
+        w_rest = mean(inp.m_s2) * 2.0 * dr.pi
         total = w_cone + w_rest
         return dr.select(total > 0, w_cone / dr.select(total > 0, total, 1.0), 1.0)
 
-    def selection_weights(self, si, active):
-        if self.m_diffuse_ramp is not None:
-            w_d = self.ramp_weight(self.m_diffuse_ramp, si, active)
-        else:
-            t = clamp(self.m_td.eval_1(si, active), 0.0, 1.0)
-            w_d = 2.0 * dr.pi * (mean(self.m_d1.eval(si, active)) * (1.0 - t)
-                                 + mean(self.m_d2.eval(si, active)) * t)
-        if self.m_specular_ramp is not None:
-            w_s = self.ramp_weight(self.m_specular_ramp, si, active)
-        else:
-            k = self.cone_opening(si, active)
-            omega = dr.fmin(2.0 * dr.pi * k * (1.0 if self.specular_model == "phong" else 4.0),
-                            2.0 * dr.pi)
-            w_s = (mean(self.m_s1.eval(si, active)) * omega
-                   + mean(self.m_s2.eval(si, active)) * 2.0 * dr.pi)
+    def selection_weights(self, inp, si):
+        w_d = w_s = mi.Float(0.0)
+        if self.diffuse:
+            if self.m_diffuse_ramp is not None:
+                w_d = self.ramp_weight(self.m_diffuse_ramp, si)
+            else:
+                t = clamp(inp.t_d, 0.0, 1.0)
+                w_d = 2.0 * dr.pi * (mean(inp.m_d1) * (1.0 - t) + mean(inp.m_d2) * t)
+        if self.specular:
+            if self.m_specular_ramp is not None:
+                w_s = self.ramp_weight(self.m_specular_ramp, si)
+            else:
+                w_s = mean(inp.m_s1) * inp.omega + mean(inp.m_s2) * 2.0 * dr.pi
         return w_d, w_s
 
     # --- specular sampling: highlight cone + uniform hemisphere ----------------
-    def sample_specular(self, si, sample2, active):
-        q = self.cone_probability(si, active)
+    def sample_specular(self, inp, si, sample2):
+        q = self.cone_probability(inp)
         in_cone = sample2.x < q
         # reuse sample2.x for the chosen part
         x = dr.select(in_cone, sample2.x / dr.select(q > 0, q, 1.0),
@@ -355,22 +349,20 @@ class Toon(BRDF):
         wo_rest = mi.warp.square_to_uniform_hemisphere(u)
         if self.m_specular_ramp is not None:
             return wo_rest
-        k = self.cone_opening(si, active)
         if self.specular_model == "blinn":
-            h = square_to_cone(u, k)                                  # half vector
+            h = square_to_cone(u, inp.k)                                  # half vector
             wo_cone = mi.reflect(si.wi, h)
         else:
-            wo_cone = mi.Frame3f(mi.reflect(si.wi)).to_world(square_to_cone(u, k))
+            wo_cone = mi.Frame3f(mi.reflect(si.wi)).to_world(square_to_cone(u, inp.k))
         return dr.select(in_cone, wo_cone, wo_rest)
 
-    def pdf_specular(self, si, wo, active):
+    def pdf_specular(self, inp, si, wo):
         pdf_rest = dr.select(mi.Frame3f.cos_theta(wo) > 0, dr.inv_two_pi, 0.0)
         if self.m_specular_ramp is not None:
             return pdf_rest
-        q = self.cone_probability(si, active)
-        k = self.cone_opening(si, active)
+        q = self.cone_probability(inp)
         c = specular_cosine(si.wi, wo, self.specular_model)
-        pdf_cone = cone_pdf(c, k)
+        pdf_cone = cone_pdf(c, inp.k)
         if self.specular_model == "blinn":
             h = mf.half_vector(si.wi, wo)
             o_dot_h = dr.dot(wo, h)
@@ -378,15 +370,4 @@ class Toon(BRDF):
         return q * pdf_cone + (1.0 - q) * pdf_rest
 
     def describe(self) -> dict:
-        fields = {"specular_model": self.specular_model, "smoothness": self.m_smoothness}
-        if self.m_diffuse_ramp is None:
-            fields.update(diffuse_reflectance=self.m_d1, diffuse_shade=self.m_d2,
-                          diffuse_threshold=self.m_td)
-        else:
-            fields["diffuse_ramp"] = self.m_diffuse_ramp
-        if self.m_specular_ramp is None:
-            fields.update(specular_reflectance=self.m_s1, specular_shade=self.m_s2,
-                          specular_threshold=self.m_ts)
-        else:
-            fields["specular_ramp"] = self.m_specular_ramp
-        return fields
+        return {"specular_model": self.specular_model, **BRDF.describe(self)}

@@ -105,11 +105,14 @@ proportion to mean(m_D) (pi·mean(m_D) in scanline mode) vs mean(m_S).
 """
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import drjit as dr
 import mitsuba as mi
 
-from . import lambert
-from .base import BRDF, Reader, is_zero, mean
+from . import energy, lambert, microfacet as mf
+from .base import BRDF, Param, Reader, mean
+from .grid import Axis
 
 ALPHA_MIN = 1e-4      # smallest roughness used (0 is clamped here)
 TINY = 1e-18          # keeps cosines away from 0 (TINY² is still a normal float32)
@@ -202,15 +205,9 @@ def pdf_half_vector(h, alpha_t, alpha_b):
     return dr.select(valid, p, 0.0)
 
 
-def half_vector(wi, wo):
-    """normalize(wi + wo); the zero vector when wi = -wo."""
-    h = wi + wo
-    return h * dr.rsqrt(dr.fmax(dr.squared_norm(h), dr.square(TINY)))
-
-
 def pdf_specular(wi, wo, alpha_t, alpha_b):
     """Density of reflect(wi, h), h ~ p_h, at wo: p_h(h) / (4 wo·h)."""
-    h = half_vector(wi, wo)
+    h = mf.half_vector(wi, wo)
     o_h = dr.dot(wo, h)
     p = pdf_half_vector(h, alpha_t, alpha_b) / (4.0 * dr.fmax(o_h, TINY))
     return dr.select(o_h > 0, p, 0.0)
@@ -220,75 +217,112 @@ def pdf_specular(wi, wo, alpha_t, alpha_b):
 #  The plugin
 # ----------------------------------------------------------------------------
 
+def sample_lobe(wi, sample2, alpha_t, alpha_b):
+    """Sample h, the half vector, then reflect the viewer about it."""
+    return mi.reflect(wi, sample_half_vector(sample2, alpha_t, alpha_b))
+
+
+# Energy compensation: E of the specular lobe (m_S = 1) over (mu, alpha) when
+# isotropic, over (mu, sin²phi, alpha_u, alpha_v) when anisotropic.
+ALPHA_AXIS = Axis("alpha", 0.0, 1.0, 25, "sqrt")
+ISOTROPIC_AXES = (Axis("mu", 0.0, 1.0, 33, "sqrt"), ALPHA_AXIS)
+ANISOTROPIC_AXES = (Axis("mu", 0.0, 1.0, 25, "sqrt"), Axis("sin2phi", 0.0, 1.0, 9),
+                    Axis("alpha_u", 0.0, 1.0, 17, "sqrt"), Axis("alpha_v", 0.0, 1.0, 17, "sqrt"))
+
+
+def _clamped(f):
+    """f with its roughness arguments clamped to ALPHA_MIN, as the plugin does."""
+    return lambda wi, x, *alphas: f(wi, x, *(dr.fmax(a, ALPHA_MIN) for a in alphas))
+
+
+ISOTROPIC = energy.AlbedoSpec(
+    "ward/isotropic", ISOTROPIC_AXES,
+    f=_clamped(lambda wi, wo, a: specular_vectors(wi, wo, a, a)),
+    sample=_clamped(lambda wi, u, a: sample_lobe(wi, u, a, a)),
+    pdf=_clamped(lambda wi, wo, a: pdf_specular(wi, wo, a, a)))
+ANISOTROPIC = energy.AlbedoSpec(
+    "ward/anisotropic", ANISOTROPIC_AXES, f=_clamped(specular_vectors),
+    sample=_clamped(sample_lobe), pdf=_clamped(pdf_specular))
+
+
 class Ward(BRDF):
     name = "ward"
+    compensable = True
+    PARAMS = (
+        Param("diffuse_reflectance", 0.5),                                    # m_D
+        Param("specular_reflectance", 0.2),                                   # m_S
+        Param("alpha", 0.1, kind="scalar", role="shape", upper=1.0),          # a_t = a_b
+        Param("alpha_u", 0.1, kind="scalar", role="shape", upper=1.0),        # a_t
+        Param("alpha_v", 0.1, kind="scalar", role="shape", upper=1.0),        # a_b
+    )
 
     def read(self, reader: Reader) -> None:
         self.formula = reader.choice("formula", "vectors", FORMULAS)
-        self.m_diffuse = reader.texture("diffuse_reflectance", 0.5)     # m_D
-        self.m_specular = reader.texture("specular_reflectance", 0.2)   # m_S
         props = reader.props
         self.anisotropic = "alpha_u" in props or "alpha_v" in props
-        if self.anisotropic:
-            if "alpha" in props:
-                raise reader.error("alpha", props["alpha"],
-                                   "either alpha or alpha_u/alpha_v, not both")
-            self.m_alpha_u = reader.texture("alpha_u", 0.1)            # a_t
-            self.m_alpha_v = reader.texture("alpha_v", 0.1)            # a_b
-        else:
-            self.m_alpha_u = self.m_alpha_v = reader.texture("alpha", 0.1)
+        if self.anisotropic and "alpha" in props:
+            raise reader.error("alpha", props["alpha"],
+                               "either alpha or alpha_u/alpha_v, not both")
+        roughness = ("alpha_u", "alpha_v") if self.anisotropic else ("alpha",)
+        for p in self.PARAMS:
+            if p.name in roughness or not p.name.startswith("alpha"):
+                self.read_param(reader, p)
 
-    def traverse(self, cb):
-        flags = mi.ParamFlags.Differentiable
-        cb.put("diffuse_reflectance", self.m_diffuse, flags)
-        cb.put("specular_reflectance", self.m_specular, flags)
-        if self.anisotropic:
-            cb.put("alpha_u", self.m_alpha_u, flags)
-            cb.put("alpha_v", self.m_alpha_v, flags)
-        else:
-            cb.put("alpha", self.m_alpha_u, flags)
+    @classmethod
+    def albedo_specs(cls) -> list[energy.AlbedoSpec]:
+        return [ISOTROPIC, ANISOTROPIC]
 
     # --- lobes ---------------------------------------------------------------
     def has_diffuse(self) -> bool:
-        return not is_zero(self.m_diffuse)
+        return not self.off("diffuse_reflectance")
 
     def has_specular(self) -> bool:
-        return not is_zero(self.m_specular)
+        return not self.off("specular_reflectance")
 
-    def alphas(self, si, active):
-        """(a_t, a_b), clamped to ALPHA_MIN."""
-        alpha_t = dr.fmax(self.m_alpha_u.eval_1(si, active), ALPHA_MIN)
-        if not self.anisotropic:
-            return alpha_t, alpha_t
-        return alpha_t, dr.fmax(self.m_alpha_v.eval_1(si, active), ALPHA_MIN)
-
-    def lobes(self, si, wo, active):
-        f_d = mi.Spectrum(0.0)
-        f_s = mi.Spectrum(0.0)
+    def evaluate(self, si, active):
+        if self.anisotropic:
+            alpha_t = dr.fmax(self.m_alpha_u.eval_1(si, active), ALPHA_MIN)
+            alpha_b = dr.fmax(self.m_alpha_v.eval_1(si, active), ALPHA_MIN)
+        else:
+            alpha_t = alpha_b = dr.fmax(self.m_alpha.eval_1(si, active), ALPHA_MIN)
+        inp = SimpleNamespace(alpha_t=alpha_t, alpha_b=alpha_b)
         if self.diffuse:
-            m_d = self.m_diffuse.eval(si, active)
-            f_d = lambert.f(m_d, mi.Frame3f.cos_theta(wo), self.mode)
+            inp.m_d = self.m_diffuse_reflectance.eval(si, active)
         if self.specular:
-            m_s = self.m_specular.eval(si, active)
-            f_s = m_s * SPECULAR[self.formula](si.wi, wo, *self.alphas(si, active))
-        return f_d, f_s
+            inp.m_s = self.m_specular_reflectance.eval(si, active)
+        return inp
 
-    def selection_weights(self, si, active):
-        return (lambert.albedo(mean(self.m_diffuse.eval(si, active)), self.mode),
-                mean(self.m_specular.eval(si, active)))
+    def f_diffuse(self, inp, si, wo):
+        return lambert.f(inp.m_d, mi.Frame3f.cos_theta(wo), self.mode)
+
+    def f_specular(self, inp, si, wo):
+        return inp.m_s * SPECULAR[self.formula](si.wi, wo, inp.alpha_t, inp.alpha_b)
+
+    def selection_weights(self, inp, si):
+        w_d = lambert.albedo(mean(inp.m_d), self.mode) if self.diffuse else mi.Float(0.0)
+        w_s = mean(inp.m_s) if self.specular else mi.Float(0.0)
+        return w_d, w_s
 
     # --- specular sampling ----------------------------------------------------
-    def sample_specular(self, si, sample2, active):
-        # Sample h, the half vector, then reflect the viewer about it.
-        h = sample_half_vector(sample2, *self.alphas(si, active))
-        return mi.reflect(si.wi, h)
+    def sample_specular(self, inp, si, sample2):
+        return sample_lobe(si.wi, sample2, inp.alpha_t, inp.alpha_b)
 
-    def pdf_specular(self, si, wo, active):
-        return pdf_specular(si.wi, wo, *self.alphas(si, active))
+    def pdf_specular(self, inp, si, wo):
+        return pdf_specular(si.wi, wo, inp.alpha_t, inp.alpha_b)
+
+    # --- energy compensation ----------------------------------------------------
+    def albedo(self, inp, v):
+        if self.anisotropic:
+            return energy.table(ANISOTROPIC)(v, inp.alpha_t, inp.alpha_b)
+        return energy.table(ISOTROPIC)(v, inp.alpha_t)
+
+    def albedo_average(self, inp):
+        if self.anisotropic:
+            return energy.table(ANISOTROPIC).average(inp.alpha_t, inp.alpha_b)
+        return energy.table(ISOTROPIC).average(inp.alpha_t)
+
+    def ms_colour(self, inp):
+        return inp.m_s
 
     def describe(self) -> dict:
-        alphas = ({"alpha_u": self.m_alpha_u, "alpha_v": self.m_alpha_v}
-                  if self.anisotropic else {"alpha": self.m_alpha_u})
-        return {"formula": self.formula, **alphas,
-                "diffuse_reflectance": self.m_diffuse,
-                "specular_reflectance": self.m_specular}
+        return {"formula": self.formula, **BRDF.describe(self)}

@@ -13,7 +13,7 @@ FURNACE: dict[str, list[tuple[str, dict]]] = {
         ("GGX, Smith, alpha = 1, k = 0, F0 = 1",
          {"type": "cook_torrance", "distribution": "ggx", "geometry": "smith", "alpha": 1.0,
           "k": 0.0, "f0": 1.0, "specular_reflectance": 1.0}),
-        ("Blinn D, Smith (Beckmann G1), alpha = 1, k = 0, F0 = 1",
+        ("Blinn D, Smith (Blinn G1), alpha = 1, k = 0, F0 = 1",
          {"type": "cook_torrance", "distribution": "blinn", "geometry": "smith", "alpha": 1.0,
           "k": 0.0, "f0": 1.0, "specular_reflectance": 1.0}),
         ("Beckmann, V-cavity, alpha = 0.3, k = 0.5, F0 = 1",

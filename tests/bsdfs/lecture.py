@@ -4,6 +4,7 @@ Written from the lecture text, not from the package: d is the light direction
 (lx), w the viewer (w_r), the normal is n = (0, 0, 1); arrays of directions are
 (N, 3). Float64 throughout.
 """
+import functools
 import math
 
 import numpy as np
@@ -55,8 +56,36 @@ def g_beckmann(na, rho):
     return 2 / (1 + erf(a) + np.exp(-a**2) / (a * np.sqrt(np.pi)))
 
 
+@functools.lru_cache(maxsize=None)
+def _g_blinn_curve(rho, n_mu=401, n_theta=400, n_phi=256):
+    """G1 of the Blinn distribution on a grid of cos θ, by brute-force 2-D
+    quadrature of its definition G1(v) = cos θ_v / ∫ max(0, v·m) D(m) dm
+    (Gauss-Legendre in θ_m, midpoint in φ_m; the package tabulates the same
+    definition with an analytic azimuthal integral)."""
+    x, w = np.polynomial.legendre.leggauss(n_theta)
+    theta = np.pi / 4 * (x + 1)
+    w_theta = np.pi / 4 * w
+    phi = (np.arange(n_phi) + 0.5) * np.pi / n_phi          # [0, pi]; the rest by symmetry
+    T, P = np.meshgrid(theta, phi, indexing="ij")
+    m = np.stack([np.sin(T) * np.cos(P), np.sin(T) * np.sin(P), np.cos(T)], axis=-1)
+    weight = (D_blinn(np.cos(T), rho) * np.sin(T) * w_theta[:, None] * 2 * np.pi / n_phi)
+    t = np.linspace(0.0, np.pi / 2, n_mu)
+    mu = np.cos(t)
+    area = np.array([np.sum(np.maximum(0.0, m @ np.array([np.sin(a), 0.0, np.cos(a)])) * weight)
+                     for a in t])
+    return mu[::-1], (mu / area)[::-1]
+
+
+def g_blinn(na, rho):
+    """Smith G1 of the Blinn distribution itself (issue 13), interpolated
+    (cubic) from the brute-force quadrature above."""
+    from scipy.interpolate import CubicSpline
+    mu, g = _g_blinn_curve(float(rho))
+    return CubicSpline(mu, g)(na)
+
+
 D = {"blinn": D_blinn, "beckmann": D_beckmann, "ggx": D_ggx}
-G1 = {"blinn": g_beckmann, "beckmann": g_beckmann, "ggx": g_ggx}
+G1 = {"blinn": g_blinn, "beckmann": g_beckmann, "ggx": g_ggx}
 
 
 def cook_torrance_terms(d, w, rho, f0, distribution, geometry):

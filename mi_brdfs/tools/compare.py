@@ -136,6 +136,14 @@ def refuse_nonfinite(image: np.ndarray, path: str) -> None:
                            "--mask-nonfinite leaves them out")
 
 
+def require_reports() -> None:
+    """Import the report dependencies now, so that a plain install (without the
+    ``reports`` extra) fails before any work: ModuleNotFoundError names the module."""
+    import flip_evaluator  # noqa: F401
+    import matplotlib  # noqa: F401
+    import scipy  # noqa: F401
+
+
 def check_pair(ref: np.ndarray, test: np.ndarray, ref_path: str, test_path: str) -> None:
     if ref.shape != test.shape:
         raise CompareError(f"{test_path} is {test.shape[1]}x{test.shape[0]} but the reference "
@@ -444,6 +452,7 @@ def compare(reference: str, tests: list[str], out_dir: str, thresholds: dict | N
         raise CompareError(f"unknown tone-mapping operator {operator!r}")
     if flip_mode is not None and flip_mode not in FLIP_MODES:
         raise CompareError(f"unknown FLIP mode {flip_mode!r}; valid: {', '.join(FLIP_MODES)}")
+    require_reports()
     inputs = [reference, *tests]
     for path in inputs:
         check_type(path)

@@ -519,6 +519,7 @@ def validate(out_dir: str, quick: bool = False, log: Callable[[str], None] = pri
 
     import mi_brdfs  # noqa: F401  (plugins registered)
 
+    compare.require_reports()
     size = QUICK if quick else FULL
     furnace = catalog.quick(catalog.FURNACE, 2) if quick else catalog.FURNACE
     chi2 = catalog.quick(catalog.CHI2, 2) if quick else catalog.CHI2

@@ -37,7 +37,7 @@ import re
 import sys
 import time
 from importlib import metadata
-from typing import Callable
+from typing import Callable, NoReturn
 
 from ..render import output, tonemap
 from . import outputs
@@ -190,7 +190,7 @@ def versions() -> dict[str, str]:
             "drjit": version("drjit")}
 
 
-def check_render_numbers(scene, args, defines: dict[str, str]) -> int:
+def check_render_numbers(scene, args: argparse.Namespace, defines: dict[str, str]) -> int:
     """The spp to render; errors for a scene whose numbers cannot render."""
     spp = args.spp if args.spp is not None else scene_spp(scene)
     if spp < 1:
@@ -208,7 +208,7 @@ def check_render_numbers(scene, args, defines: dict[str, str]) -> int:
     return spp
 
 
-def cmd_render(args) -> int:
+def cmd_render(args: argparse.Namespace) -> int:
     scene_path, bundled = resolve_scene(args.scene)
     defines = parse_defines(args.defines)
     targets = args.output or [default_output(scene_path, bundled)]
@@ -258,7 +258,7 @@ def cmd_render(args) -> int:
     return 0
 
 
-def cmd_scenes(args) -> int:
+def cmd_scenes(args: argparse.Namespace) -> int:
     from .. import scenes
     for name in scenes.names():
         print(f"{name:15} {scenes.path(name)}")
@@ -269,7 +269,7 @@ def cmd_scenes(args) -> int:
 #  Reports
 # ----------------------------------------------------------------------------
 
-def cmd_compare(args) -> int:
+def cmd_compare(args: argparse.Namespace) -> int:
     from . import compare
 
     thresholds = {k: getattr(args, k) for k in compare.THRESHOLDS}
@@ -285,7 +285,7 @@ def cmd_compare(args) -> int:
     return 3 if any(c.verdict == "FAIL" for c in results) else 0
 
 
-def cmd_validate(args) -> int:
+def cmd_validate(args: argparse.Namespace) -> int:
     from . import validate
 
     set_threads(args.threads)
@@ -302,7 +302,7 @@ def cmd_validate(args) -> int:
     return 1 if s["fail"] else 0
 
 
-def cmd_bench(args) -> int:
+def cmd_bench(args: argparse.Namespace) -> int:
     from . import bench
 
     set_threads(args.threads)
@@ -322,7 +322,7 @@ def cmd_bench(args) -> int:
 class Parser(argparse.ArgumentParser):
     """argparse with the project's error convention: one line, exit status 1."""
 
-    def error(self, message: str):
+    def error(self, message: str) -> NoReturn:
         self.exit(1, f"{self.prog}: error: {message}\n")
 
 

@@ -52,6 +52,7 @@ import json
 import math
 import os
 from dataclasses import dataclass, field
+from typing import Iterator
 
 import numpy as np
 
@@ -423,7 +424,7 @@ figure {{ margin: 0; }} figure img {{ width: 360px; }}
 """
 
 
-def _csv_rows(comparisons: list[Comparison]):
+def _csv_rows(comparisons: list[Comparison]) -> Iterator[list]:
     yield ["test", "channel", *METRIC_ORDER, "verdict"]
     for c in comparisons:
         yield [c.test_path, "all", *[c.metrics[k] for k in METRIC_ORDER], c.verdict]
@@ -506,7 +507,7 @@ def compare(reference: str, tests: list[str], out_dir: str, thresholds: dict | N
     return comparisons
 
 
-def parse_region(text: str | None):
+def parse_region(text: str | None) -> tuple[int, int, int, int] | None:
     if not text:
         return None
     try:

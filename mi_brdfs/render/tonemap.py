@@ -18,26 +18,27 @@ aces       x (2.51 x + 0.03) / (x (2.43 x + 0.59) + 0.14), clamped       Narkowi
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 
-def _clean(x):
+def _clean(x: ArrayLike) -> np.ndarray:
     """NaN and negative values -> 0; +Inf stays (each operator maps it to 1)."""
     x = np.nan_to_num(np.asarray(x, dtype=np.float64), nan=0.0, posinf=np.inf, neginf=0.0)
     return np.maximum(x, 0.0)
 
 
-def clamp(x):
+def clamp(x: ArrayLike) -> np.ndarray:
     return np.clip(_clean(x), 0.0, 1.0)
 
 
-def reinhard(x):
+def reinhard(x: ArrayLike) -> np.ndarray:
     x = _clean(x)
     with np.errstate(invalid="ignore"):
         y = x / (1.0 + x)
     return np.where(np.isinf(x), 1.0, y)
 
 
-def aces(x):
+def aces(x: ArrayLike) -> np.ndarray:
     x = _clean(x)
     with np.errstate(invalid="ignore", over="ignore"):
         y = x * (2.51 * x + 0.03) / (x * (2.43 * x + 0.59) + 0.14)
@@ -47,13 +48,13 @@ def aces(x):
 OPERATORS = {"clamp": clamp, "gamma": clamp, "reinhard": reinhard, "aces": aces}
 
 
-def srgb_encode(v):
+def srgb_encode(v: ArrayLike) -> np.ndarray:
     """The sRGB transfer function (IEC 61966-2-1) on values in [0, 1]."""
     v = np.clip(v, 0.0, 1.0)
     return np.where(v <= 0.0031308, 12.92 * v, 1.055 * np.power(v, 1 / 2.4) - 0.055)
 
 
-def tonemap(rgb, operator: str = "clamp", exposure: float = 0.0) -> np.ndarray:
+def tonemap(rgb: ArrayLike, operator: str = "clamp", exposure: float = 0.0) -> np.ndarray:
     """Linear RGB -> display-linear values in [0, 1] (before sRGB encoding)."""
     if operator not in OPERATORS:
         raise ValueError(f"unknown tone-mapping operator {operator!r}; "
@@ -62,13 +63,13 @@ def tonemap(rgb, operator: str = "clamp", exposure: float = 0.0) -> np.ndarray:
     return OPERATORS[operator](x)
 
 
-def to_srgb8(rgb, operator: str = "clamp", exposure: float = 0.0) -> np.ndarray:
+def to_srgb8(rgb: ArrayLike, operator: str = "clamp", exposure: float = 0.0) -> np.ndarray:
     """Linear RGB -> 8-bit sRGB (uint8), through tonemap() and srgb_encode()."""
     encoded = srgb_encode(tonemap(rgb, operator, exposure))
     return np.round(encoded * 255.0).astype(np.uint8)
 
 
-def write_png(path: str, rgb, operator: str = "clamp", exposure: float = 0.0) -> None:
+def write_png(path: str, rgb: ArrayLike, operator: str = "clamp", exposure: float = 0.0) -> None:
     """Tone-map a linear RGB image and write it as an 8-bit sRGB PNG, atomically."""
     import mitsuba as mi
 

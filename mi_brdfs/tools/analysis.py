@@ -73,11 +73,19 @@ def polar_lobes(ax, bsdf, angles=(0, 30, 60, 80), title: str = "") -> None:
     for a in angles:
         theta_o, value = plane_of_incidence(bsdf, a)
         ax.plot(theta_o, value, label=f"θ_i = {a}°")
+    from matplotlib.ticker import MaxNLocator
+
     ax.set_theta_zero_location("N")
     ax.set_thetamin(-90)
     ax.set_thetamax(90)
+    ax.set_thetagrids(range(-90, 91, 30), [f"{t}°" for t in range(-90, 91, 30)], fontsize=8)
+    # A half disc has room for a few radial labels only: at most 3, none at 0
+    # (many labels ran into each other, "0.00.050.10...").
+    ax.yaxis.set_major_locator(MaxNLocator(nbins=3, prune="lower"))
+    ax.tick_params(axis="y", labelsize=7)
+    ax.set_rlabel_position(-22.5)
     if title:
-        ax.set_title(title, fontsize=9)
+        ax.set_title(title, fontsize=10)
 
 
 def sphere_scene(bsdf: dict, res: int = 128, integrator: dict | None = None,

@@ -1,33 +1,89 @@
-"""The ``mi-brdfs`` command (also ``python -m mi_brdfs``).
+"""The ``mi-brdfs`` command (also ``python -m mi_brdfs``), with the flags of
+Mitsuba's own ``mitsuba`` command.
 
-    mi-brdfs render SCENE.xml [-D key=value ...] [--spp N] [--passes P] [-o out.exr]
-                    [--png out.png [--tonemap NAME] [--exposure EV]] [--seed S]
-                    [--variant NAME] [--verbose]
-    mi-brdfs compare REFERENCE.exr TEST.exr [...] -o REPORT_DIR [--max-rmse X ...]
+    mi-brdfs render SCENE [-D key=value ...] [-o OUT.exr|.png|.jpg ...] [--spp N]
+                    [--passes P] [--seed S] [--tonemap NAME] [--exposure EV]
+                    [-m VARIANT] [-t THREADS] [-q] [-v ...] [--traceback]
+    mi-brdfs scenes
+    mi-brdfs compare REFERENCE TEST [TEST ...] -o REPORT_DIR [--flip ldr|hdr] ...
                     (see mi_brdfs/tools/compare.py; exit 0 pass, 3 a threshold failed)
+    mi-brdfs validate -o REPORT_DIR [--quick]   (exit 1 when a check fails)
+    mi-brdfs bench -o OUT_DIR [--quick] [--only GROUP]
+    mi-brdfs --version
 
-Registers the plugins, loads the scene with its ``-D`` defaults (as Mitsuba's
-own ``mitsuba`` command does), renders the spp in passes with different seeds
-(Mitsuba's JIT variants report no progress of their own) and averages them,
-showing progress and an ETA after each pass; then writes the linear EXR and,
-if asked, a tone-mapped 8-bit sRGB PNG. Outputs are written atomically.
-Errors print one line (``mi-brdfs: error: ...``) and exit with status 1; with
-``--verbose`` the traceback is shown.
+``render`` takes a scene file or the name of a bundled scene (``mi-brdfs
+scenes`` lists them), loads it with its ``-D`` defaults (as ``mitsuba -D``),
+renders the spp in passes with different seeds (Mitsuba's JIT variants report
+no progress of their own) and averages them, with a progress bar on a
+terminal and plain lines in a pipe. Each ``-o`` is written by its extension
+(:mod:`mi_brdfs.render.output`): ``.exr`` keeps every film channel and the
+render's metadata, ``.png``/``.jpg`` are tone-mapped 8-bit sRGB. Without
+``-o`` the output is ``SCENE.exr`` beside the scene file, as ``mitsuba``
+writes it (a bundled scene's: in the current folder).
+
+``-m/--variant`` picks the Mitsuba variant, ``-t/--threads`` Dr.Jit's thread
+count, ``-v`` (repeatable) raises Mitsuba's log level (Info, Debug, Trace).
+
+Every number and path is checked before work starts. Errors print one line,
+``mi-brdfs COMMAND: error: ...``, and exit with status 1 (never a signal);
+``--traceback`` shows the traceback instead.
 """
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import re
 import sys
 import time
+from importlib import metadata
+from typing import Callable, NoReturn
 
-from ..render import exr, tonemap
-from ..render.passes import render_passes
+from ..render import output, tonemap
+from . import outputs
+from .progress import Progress
+
+UINT32_MAX = 2**32 - 1
+REPORT_MODULES = ("matplotlib", "scipy", "flip_evaluator")
+KNOWN_DEFINES = {"spp": 1, "res": 1}      # the bundled scenes' numeric defaults -> minimum
 
 
 class CLIError(Exception):
     """An error reported as one line, without a traceback."""
+
+
+# ----------------------------------------------------------------------------
+#  Checked numbers (argparse types: a bad value is one line, exit 1)
+# ----------------------------------------------------------------------------
+
+def integer(low: int, high: int | None = None) -> Callable[[str], int]:
+    """An argparse type: an integer in [low, high]."""
+    valid = f"an integer >= {low}" if high is None else f"an integer from {low} to {high}"
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"invalid value {text!r}; valid: {valid}") from None
+        if value < low or (high is not None and value > high):
+            raise argparse.ArgumentTypeError(f"invalid value {text}; valid: {valid}")
+        return value
+    return parse
+
+
+def real(low: float, high: float) -> Callable[[str], float]:
+    """An argparse type: a finite number in [low, high]."""
+    valid = f"a number from {low:g} to {high:g}"
+
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"invalid value {text!r}; valid: {valid}") from None
+        if not math.isfinite(value) or not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"invalid value {text}; valid: {valid}")
+        return value
+    return parse
 
 
 def parse_defines(pairs: list[str]) -> dict[str, str]:
@@ -36,101 +92,221 @@ def parse_defines(pairs: list[str]) -> dict[str, str]:
         key, sep, value = pair.partition("=")
         if not sep or not key:
             raise CLIError(f"-D expects key=value, got {pair!r}")
+        if key in KNOWN_DEFINES:
+            try:
+                number = int(value)
+            except ValueError:
+                number = None
+            if number is None or number < KNOWN_DEFINES[key]:
+                raise CLIError(f"-D {key}={value} is invalid; valid: an integer >= "
+                               f"{KNOWN_DEFINES[key]}")
         defines[key] = value
     return defines
 
 
-def check_writable(path: str) -> None:
-    directory = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(directory):
-        raise CLIError(f"cannot write {path}: directory {directory} does not exist")
-    if not os.access(directory, os.W_OK):
-        raise CLIError(f"cannot write {path}: directory {directory} is not writable")
+# ----------------------------------------------------------------------------
+#  Mitsuba's settings: variant, threads, log level
+# ----------------------------------------------------------------------------
+
+def set_variant(name: str | None) -> str:
+    import mitsuba as mi
+
+    import mi_brdfs
+    if name:
+        if name not in mi.variants():
+            raise CLIError(f"-m {name} is not a Mitsuba variant here; valid: "
+                           f"{', '.join(mi.variants())}")
+        try:
+            mi.set_variant(name)
+        except Exception as error:
+            raise CLIError(f"-m {name} cannot be used here: {one_line(error)}") from None
+    return mi_brdfs.register()
 
 
-def progress(done: int, total: int, elapsed: float, stream=sys.stderr) -> None:
-    width = 30
-    filled = int(width * done / total)
-    eta = elapsed / done * (total - done) if done else float("nan")
-    stream.write(f"\r[{'#' * filled}{'.' * (width - filled)}] {done}/{total} spp, "
-                 f"{elapsed:.1f} s, ETA {eta:.1f} s ")
-    if done == total:
-        stream.write("\n")
-    stream.flush()
+def set_threads(count: int | None) -> None:
+    if count is not None:
+        import drjit as dr
+        dr.set_thread_count(count)
+
+
+def set_verbosity(level: int) -> None:
+    """0: warnings only; 1: Mitsuba's Info; 2: Debug (and Dr.Jit's Info); 3: Trace."""
+    import drjit as dr
+    import mitsuba as mi
+    mi.set_log_level([mi.LogLevel.Warn, mi.LogLevel.Info, mi.LogLevel.Debug,
+                      mi.LogLevel.Trace][min(level, 3)])
+    if level >= 2:
+        dr.set_log_level(dr.LogLevel.Info if level == 2 else dr.LogLevel.Debug)
+
+
+def info_logger(prog: str, level: int) -> Callable[[str], None]:
+    if level < 1:
+        return lambda msg: None
+    return lambda msg: print(f"{prog}: {msg}", file=sys.stderr)
+
+
+# ----------------------------------------------------------------------------
+#  render and scenes
+# ----------------------------------------------------------------------------
+
+def resolve_scene(arg: str) -> tuple[str, bool]:
+    """(scene file, bundled?) for a path or a bundled scene's name."""
+    from .. import scenes
+
+    if os.path.isdir(arg):
+        raise CLIError(f"scene {arg} is a folder; give an XML file or a bundled scene's name")
+    if os.path.exists(arg):
+        return arg, False
+    bundled = scenes.path(arg)
+    if bundled is not None and os.sep not in arg:
+        return str(bundled), True
+    raise CLIError(f"scene not found: {arg} (not a file; bundled scenes: "
+                   f"{', '.join(scenes.names())})")
+
+
+def default_output(scene: str, bundled: bool) -> str:
+    """SCENE.exr beside the scene file (as ``mitsuba``); a bundled scene's in
+    the current folder (never inside the installed package)."""
+    stem = os.path.splitext(scene)[0]
+    return os.path.basename(stem) + ".exr" if bundled else stem + ".exr"
 
 
 def scene_spp(scene) -> int:
     return scene.sensors()[0].sampler().sample_count()
 
 
-def cmd_render(args) -> int:
-    if not os.path.exists(args.scene):
-        raise CLIError(f"scene not found: {args.scene}")
-    defines = parse_defines(args.defines)
-    out = args.output or os.path.splitext(os.path.basename(args.scene))[0] + ".exr"
-    check_writable(out)
-    if args.png:
-        check_writable(args.png)
-    if args.tonemap not in tonemap.OPERATORS:
-        raise CLIError(f"unknown --tonemap {args.tonemap!r}; valid: {', '.join(tonemap.OPERATORS)}")
+def film_channel_names(scene) -> list[str]:
+    bitmap = scene.sensors()[0].film().bitmap()
+    return [bitmap.struct_()[i].name for i in range(bitmap.channel_count())]
 
-    import mi_brdfs
-    import mitsuba as mi
-    if args.variant:
+
+def versions() -> dict[str, str]:
+    def version(dist: str) -> str:
         try:
-            mi.set_variant(args.variant)
-        except Exception as error:
-            raise CLIError(f"variant {args.variant!r} is not available: {error}") from None
-        mi_brdfs.register()
+            return metadata.version(dist)
+        except metadata.PackageNotFoundError:
+            return "unknown"
+    return {"mi_brdfs": version("mi_brdfs"), "mitsuba": version("mitsuba"),
+            "drjit": version("drjit")}
+
+
+def check_render_numbers(scene, args: argparse.Namespace, defines: dict[str, str]) -> int:
+    """The spp to render; errors for a scene whose numbers cannot render."""
+    spp = args.spp if args.spp is not None else scene_spp(scene)
+    if spp < 1:
+        where = f"-D spp={defines['spp']}" if "spp" in defines else "its sampler"
+        raise CLIError(f"the scene's sample count is {spp} (from {where}); valid: an integer "
+                       ">= 1 (or give --spp N)")
+    width, height = scene.sensors()[0].film().crop_size()
+    if width < 1 or height < 1:
+        raise CLIError(f"the scene's film is {width}x{height} pixels; valid: at least 1x1")
+    chunks = max(1, min(args.passes, spp))
+    max_seed = (UINT32_MAX - (chunks - 1)) // chunks
+    if args.seed > max_seed:
+        raise CLIError(f"--seed {args.seed} is invalid with {chunks} passes; valid: an integer "
+                       f"from 0 to {max_seed}")
+    return spp
+
+
+def cmd_render(args: argparse.Namespace) -> int:
+    scene_path, bundled = resolve_scene(args.scene)
+    defines = parse_defines(args.defines)
+    targets = args.output or [default_output(scene_path, bundled)]
+    for path in targets:
+        output.check_extension(path)
+        outputs.check_output_file(path)
+    if args.tonemap not in tonemap.OPERATORS:
+        raise CLIError(f"--tonemap {args.tonemap} is unknown; valid: {', '.join(tonemap.OPERATORS)}")
+
+    variant = set_variant(args.variant)
+    set_threads(args.threads)
+    set_verbosity(args.verbose)
+    import drjit as dr
+    import mitsuba as mi
+
+    from ..render.passes import render_passes
 
     # parallel=False: scene loading with Python plugins in worker threads failed
     # intermittently here (bad_alloc, basic_string::_M_create); serial loading is cheap.
-    scene = mi.load_file(args.scene, parallel=False, **defines)
-    spp = args.spp or scene_spp(scene)
+    scene = mi.load_file(scene_path, parallel=False, **defines)
+    spp = check_render_numbers(scene, args, defines)
+
+    log = info_logger(args.prog, args.verbose)
+    width, height = scene.sensors()[0].film().crop_size()
+    log(f"{scene_path}: {width}x{height}, {spp} spp in {min(args.passes, spp)} passes, "
+        f"seed {args.seed}, "
+        f"variant {variant}, {dr.thread_count()} threads")
+    progress = Progress(args.prog, enabled=not args.quiet)
     start = time.perf_counter()
-    image = render_passes(scene, spp, args.passes, args.seed,
-                          show=None if args.quiet else progress)
-    rgb = image[..., :3]
-    exr.write_exr(out, rgb)
-    written = [out]
-    if args.png:
-        tonemap.write_png(args.png, rgb, args.tonemap, args.exposure)
-        written.append(args.png)
-    print(f"{args.scene}: {rgb.shape[1]}x{rgb.shape[0]}, {spp} spp in "
-          f"{time.perf_counter() - start:.1f} s -> {', '.join(written)}")
+    try:
+        image = render_passes(scene, spp, args.passes, args.seed, show=progress, log=log)
+    finally:
+        progress.close()
+    seconds = time.perf_counter() - start
+    try:
+        names = output.channel_names(film_channel_names(scene), image.shape[2])
+    except Exception:                       # a film without a bitmap: generic names
+        names = output.channel_names([], image.shape[2])
+    info = {"scene": os.path.abspath(scene_path), "spp": spp, "seed": args.seed,
+            "passes": args.passes, "variant": variant,
+            "defines": " ".join(f"{k}={v}" for k, v in defines.items()),
+            **versions()}
+    for path in targets:
+        output.write(path, image, names, info, args.tonemap, args.exposure)
+    print(f"{args.scene}: {image.shape[1]}x{image.shape[0]}, {spp} spp in {seconds:.1f} s -> "
+          f"{', '.join(targets)}")
     return 0
 
 
-def cmd_compare(args) -> int:
+def cmd_scenes(args: argparse.Namespace) -> int:
+    from .. import scenes
+    for name in scenes.names():
+        print(f"{name:15} {scenes.path(name)}")
+    return 0
+
+
+# ----------------------------------------------------------------------------
+#  Reports
+# ----------------------------------------------------------------------------
+
+def cmd_compare(args: argparse.Namespace) -> int:
     from . import compare
 
     thresholds = {k: getattr(args, k) for k in compare.THRESHOLDS}
     results = compare.compare(args.reference, args.tests, args.output, thresholds,
-                              compare.parse_region(args.crop), args.tonemap)
+                              compare.parse_region(args.crop), args.tonemap,
+                              flip_mode=args.flip, mask_nonfinite=args.mask_nonfinite)
     for c in results:
         m = c.metrics
         print(f"{c.test_path}: rmse {m['rmse']:.4g}, relmse {m['relmse']:.4g}, "
-              f"flip {m['flip']:.4g}, psnr {m['psnr']:.4g} dB -> "
-              + ("PASS" if c.passed else "FAIL: " + "; ".join(c.failures)))
+              f"flip ({m['flip_mode']}) {m['flip']:.4g}, psnr {m['psnr']:.4g} dB -> "
+              + c.verdict + (": " + "; ".join(c.failures) if c.failures else ""))
     print(f"report: {os.path.join(args.output, 'index.html')}")
-    return 0 if all(c.passed for c in results) else 3
+    return 3 if any(c.verdict == "FAIL" for c in results) else 0
 
 
-def cmd_validate(args) -> int:
+def cmd_validate(args: argparse.Namespace) -> int:
     from . import validate
 
+    set_threads(args.threads)
+    set_verbosity(args.verbose)
     log = (lambda *a: None) if args.quiet else (lambda msg: print(msg, file=sys.stderr))
     results = validate.validate(args.output, quick=args.quick, log=log)
-    failed_chi2 = [r for r in results["sampling"] if not r["passed"]]
-    over = [r for r in results["furnace"] if r["exceeds_1"]]
+    s = results["summary"]
+    for check in results["checks"]:
+        if check["status"] == "fail":
+            print(f"FAIL {check['id']}: {check['measured']}")
     print(f"report: {os.path.join(args.output, 'index.html')} ({results['seconds']:.0f} s); "
-          f"{len(failed_chi2)} chi-square failures; {len(over)} furnace rows above 1")
-    return 0
+          f"{s['pass']} checks pass, {s['known']} documented known limitations, "
+          f"{s['fail']} fail")
+    return 1 if s["fail"] else 0
 
 
-def cmd_bench(args) -> int:
+def cmd_bench(args: argparse.Namespace) -> int:
     from . import bench
 
+    set_threads(args.threads)
+    set_verbosity(args.verbose)
     log = (lambda *a: None) if args.quiet else (lambda msg: print(msg, file=sys.stderr))
     only = [g.strip() for g in args.only.split(",")] if args.only else None
     results = bench.run(args.output, quick=args.quick, only=only, cache_dir=args.cache, log=log)
@@ -139,51 +315,95 @@ def cmd_bench(args) -> int:
     return 0
 
 
-def parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="mi-brdfs", description=__doc__.splitlines()[0])
+# ----------------------------------------------------------------------------
+#  The parser
+# ----------------------------------------------------------------------------
+
+class Parser(argparse.ArgumentParser):
+    """argparse with the project's error convention: one line, exit status 1."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(1, f"{self.prog}: error: {message}\n")
+
+
+def common(threads: bool = True, variant: bool = False) -> Parser:
+    p = Parser(add_help=False)
+    if variant:
+        p.add_argument("-m", "--variant", default=None,
+                       help="Mitsuba variant (default llvm_ad_rgb), as mitsuba -m")
+    if threads:
+        p.add_argument("-t", "--threads", type=integer(1, 1024), default=None,
+                       help="Dr.Jit's thread count (default: one per core)")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress output")
+    p.add_argument("-v", "--verbose", action="count", default=0,
+                   help="more log output; repeat for more (Mitsuba's Info, Debug, Trace)")
+    p.add_argument("--traceback", action="store_true", help="show the traceback of an error")
+    return p
+
+
+def parser() -> Parser:
+    v = versions()
+    p = Parser(prog="mi-brdfs", description=__doc__.splitlines()[0])
+    p.add_argument("--version", action="version",
+                   version=f"mi-brdfs {v['mi_brdfs']} (Mitsuba {v['mitsuba']}, "
+                           f"Dr.Jit {v['drjit']})")
     sub = p.add_subparsers(dest="command", required=True)
-    r = sub.add_parser("render", help="render a scene to EXR (and PNG)")
-    r.add_argument("scene")
+
+    r = sub.add_parser("render", parents=[common(variant=True)],
+                       help="render a scene to EXR, PNG or JPEG")
+    r.add_argument("scene", help="a scene file, or a bundled scene's name (mi-brdfs scenes)")
     r.add_argument("-D", dest="defines", action="append", default=[], metavar="key=value",
-                   help="set a scene <default> parameter")
-    r.add_argument("--spp", type=int, default=None, help="samples per pixel (default: the scene's)")
-    r.add_argument("--passes", type=int, default=8, help="render in this many passes (default 8)")
-    r.add_argument("--seed", type=int, default=0)
-    r.add_argument("-o", "--output", default=None, help="EXR path (default: SCENE.exr here)")
-    r.add_argument("--png", default=None, help="also write an 8-bit sRGB PNG here")
-    r.add_argument("--tonemap", default="clamp", help="PNG tone mapping: " + ", ".join(tonemap.OPERATORS))
-    r.add_argument("--exposure", type=float, default=0.0, help="PNG exposure in stops (EV)")
-    r.add_argument("--variant", default=None, help="Mitsuba variant (default llvm_ad_rgb)")
-    r.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
-    r.add_argument("-v", "--verbose", action="store_true", help="show tracebacks on errors")
+                   help="set a scene <default> parameter, as mitsuba -D")
+    r.add_argument("-o", "--output", action="append", default=None, metavar="FILE",
+                   help="output file, by extension: .exr (every channel, metadata), .png or "
+                        ".jpg (tone-mapped 8-bit sRGB); repeatable "
+                        "(default: SCENE.exr beside the scene file)")
+    r.add_argument("--spp", type=integer(1, UINT32_MAX), default=None,
+                   help="samples per pixel (default: the scene's)")
+    r.add_argument("--passes", type=integer(1, 4096), default=8,
+                   help="render in this many passes (default 8)")
+    r.add_argument("--seed", type=integer(0, UINT32_MAX), default=0)
+    r.add_argument("--tonemap", default="clamp", choices=list(tonemap.OPERATORS),
+                   help="tone mapping of .png/.jpg outputs (default clamp)")
+    r.add_argument("--exposure", type=real(-100, 100), default=0.0,
+                   help="exposure of .png/.jpg outputs in stops (EV)")
     r.set_defaults(run=cmd_render)
 
-    c = sub.add_parser("compare", help="compare EXR renders against a reference; HTML report")
+    s = sub.add_parser("scenes", parents=[common(threads=False)], help="list the bundled scenes")
+    s.set_defaults(run=cmd_scenes)
+
+    c = sub.add_parser("compare", parents=[common(threads=False)],
+                       help="compare renders (EXR, PNG, JPEG) against a reference; HTML report")
     c.add_argument("reference")
     c.add_argument("tests", nargs="+")
-    c.add_argument("-o", "--output", required=True, help="report directory")
-    for name in ("max_rmse", "max_relmse", "max_mae", "max_abs", "max_flip", "min_psnr"):
-        c.add_argument("--" + name.replace("_", "-"), dest=name, type=float, default=None)
+    c.add_argument("-o", "--output", required=True,
+                   help="report folder: new, empty, or a previous report")
+    for name in ("max_rmse", "max_relmse", "max_mae", "max_abs", "max_flip"):
+        c.add_argument("--" + name.replace("_", "-"), dest=name, type=real(0, 1e30), default=None)
+    c.add_argument("--min-psnr", dest="min_psnr", type=real(-1e3, 1e3), default=None)
+    c.add_argument("--flip", choices=("ldr", "hdr"), default=None,
+                   help="FLIP mode (default: hdr if an input is EXR, ldr for PNG/JPEG inputs)")
+    c.add_argument("--mask-nonfinite", action="store_true",
+                   help="leave out pixels that are NaN or Inf in an input (default: refuse them)")
     c.add_argument("--crop", default=None, metavar="X,Y,W,H", help="compare this region only")
-    c.add_argument("--tonemap", default="clamp", help="display tone mapping of the pictures")
-    c.add_argument("-v", "--verbose", action="store_true", help="show tracebacks on errors")
+    c.add_argument("--tonemap", default="clamp", choices=list(tonemap.OPERATORS),
+                   help="display tone mapping of the pictures")
     c.set_defaults(run=cmd_compare)
 
-    v = sub.add_parser("validate", help="run the project's validation; HTML report")
-    v.add_argument("-o", "--output", required=True, help="report directory")
+    v = sub.add_parser("validate", parents=[common()], help="run the project's validation; HTML report")
+    v.add_argument("-o", "--output", required=True,
+                   help="report folder: new, empty, or a previous report")
     v.add_argument("--quick", action="store_true", help="reduced grid and sizes (CI)")
-    v.add_argument("-q", "--quiet", action="store_true")
-    v.add_argument("-v", "--verbose", action="store_true", help="show tracebacks on errors")
     v.set_defaults(run=cmd_validate)
 
-    b = sub.add_parser("bench", help="measure the speed/accuracy trade-offs")
+    b = sub.add_parser("bench", parents=[common()], help="measure the speed/accuracy trade-offs")
     b.add_argument("-o", "--output", required=True, help="results directory")
     b.add_argument("--quick", action="store_true", help="tiny scene, few repeats (CI)")
     b.add_argument("--only", default=None, help="comma-separated groups (default: all)")
     b.add_argument("--cache", default=None, help="reference cache (default ~/.cache/mi_brdfs)")
-    b.add_argument("-q", "--quiet", action="store_true")
-    b.add_argument("-v", "--verbose", action="store_true", help="show tracebacks on errors")
     b.set_defaults(run=cmd_bench)
+    for name, command in sub.choices.items():
+        command.set_defaults(prog=command.prog)
     return p
 
 
@@ -192,13 +412,20 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return args.run(args)
     except KeyboardInterrupt:
-        print("mi-brdfs: interrupted", file=sys.stderr)
+        print(f"{args.prog}: interrupted", file=sys.stderr)
         return 130
-    except Exception as error:       # one clear line, unless --verbose
-        if args.verbose:
+    except Exception as error:       # one clear line, unless --traceback
+        if args.traceback:
             raise
-        print(f"mi-brdfs: error: {one_line(error)}", file=sys.stderr)
+        print(f"{args.prog}: error: {describe(error, args.command)}", file=sys.stderr)
         return 1
+
+
+def describe(error: BaseException, command: str) -> str:
+    if isinstance(error, ModuleNotFoundError) and error.name in REPORT_MODULES:
+        return (f"{error.name} is not installed; {command} needs the report dependencies: "
+                "pip install 'mi_brdfs[reports]'")
+    return one_line(error)
 
 
 def one_line(error: BaseException) -> str:

@@ -1,8 +1,14 @@
-"""Compare linear EXR renders: metrics, pictures, a verdict, an HTML report.
+"""Compare renders against a reference: metrics, pictures, a verdict, an HTML report.
 
-    mi-brdfs compare REFERENCE.exr TEST.exr [TEST.exr ...] -o REPORT_DIR
+    mi-brdfs compare REFERENCE TEST [TEST ...] -o REPORT_DIR [--flip ldr|hdr]
                      [--max-rmse X] [--max-relmse X] [--max-mae X] [--max-flip X]
                      [--max-abs X] [--min-psnr DB] [--crop X,Y,W,H] [--tonemap NAME]
+                     [--mask-nonfinite]
+
+Inputs are EXR (linear; the R, G, B channels) or PNG/JPEG (sRGB-decoded to
+linear values), all of the same size. Pixels that are NaN or Inf in an input
+are refused, or left out of every metric with ``--mask-nonfinite`` (their
+count is reported).
 
 Metrics (r the reference, t the test, means over pixels and channels; each is
 also given per channel):
@@ -14,17 +20,29 @@ relmse     mean((t - r)² / (r + 0.01)²)              (pbrt's relative MSE)
 mae        mean(|t - r|)
 smape      mean(2 |t - r| / (|t| + |r|)), 0 where both are 0
 max_abs    max(|t - r|)
-psnr       10 log10(peak² / mse), peak = max(r) (1 for an all-black r); inf if mse = 0
-flip       mean FLIP error (NVIDIA flip-evaluator; HDR mode when r or t exceeds 1,
-           else LDR mode on sRGB-encoded values)
+psnr       10 log10(peak² / mse), inf if mse = 0, with ONE peak for the
+           overall value and every channel: 1 when every input is PNG/JPEG,
+           else the reference's maximum over all channels (1 if it is
+           black). The overall mse is the mean of the channels', so the
+           overall PSNR lies between the channels'.
+flip       mean FLIP error (NVIDIA flip-evaluator), in the mode ``--flip``
+           names; by default from the inputs' FILE TYPES, never from their
+           pixel values: HDR-FLIP (linear values) if any input is EXR,
+           LDR-FLIP (sRGB-encoded values, clamped to [0, 1]) when all are
+           PNG/JPEG. The mode is recorded as ``flip_mode``.
 =========  ===============================================================
 
-The report directory holds ``index.html``, ``metrics.json``, ``metrics.csv`` and
-the pictures as PNG files: both images tone-mapped the same way, the signed
-difference (with a colour bar), the relative error and the FLIP error map. It
-is written into a temporary directory beside REPORT_DIR and moved into place
-only when complete. Exit status: 0 when every test image passes the thresholds,
-3 when one fails, 1 on an error.
+Verdict per test image: PASS or FAIL against the thresholds given, "no
+thresholds" when none is given. Exit status: 0 when no test fails, 3 when
+one fails, 1 on an error.
+
+The report folder (see :mod:`.outputs`: new, empty, or a previous report;
+never a folder with other files) holds ``index.html``, ``metrics.json``,
+``metrics.csv``, the pictures as PNG (both images tone-mapped the same way,
+the signed difference and the relative error on a robust scale, the FLIP
+map) and ``maps.exr``: every image and error map as one multi-layer EXR
+(``reference``, ``testN.image``, ``testN.difference``, ``testN.relative``,
+``testN.flip``) for an EXR viewer such as tev.
 """
 from __future__ import annotations
 
@@ -33,13 +51,13 @@ import html
 import json
 import math
 import os
-import shutil
-import tempfile
 from dataclasses import dataclass, field
+from typing import Iterator
 
 import numpy as np
 
 from ..render import exr, tonemap
+from . import outputs
 
 CHANNELS = "RGB"
 THRESHOLDS = {            # option name -> (metric, comparison)
@@ -50,6 +68,10 @@ THRESHOLDS = {            # option name -> (metric, comparison)
     "max_flip": ("flip", "<="),
     "min_psnr": ("psnr", ">="),
 }
+HDR_TYPES = (".exr",)
+LDR_TYPES = (".png", ".jpg", ".jpeg")
+FLIP_MODES = ("ldr", "hdr")
+PERCENTILE = 99.0         # scale of the difference pictures: this percentile of |error|
 
 
 class CompareError(ValueError):
@@ -61,19 +83,66 @@ class CompareError(ValueError):
 # ----------------------------------------------------------------------------
 
 def load(path: str) -> np.ndarray:
-    """An EXR as (H, W, 3) float64, refusing non-finite pixels."""
+    """An input as linear (H, W, 3) float64: an EXR's R, G, B channels, or a
+    PNG/JPEG decoded from sRGB (through mi.Bitmap). Non-finite values kept."""
+    ext = check_type(path)
     if not os.path.exists(path):
         raise CompareError(f"no such file: {path}")
-    try:
-        image = exr.read_exr(path).astype(np.float64)
-    except (ValueError, OSError) as error:
-        raise CompareError(f"{path}: not a readable EXR file") from error
-    bad = ~np.isfinite(image).all(axis=-1)
+    if ext in HDR_TYPES:
+        try:
+            return exr.read_exr(path).astype(np.float64)
+        except (ValueError, OSError) as error:
+            raise CompareError(f"{path}: not a readable EXR file") from error
+    if ext in LDR_TYPES:
+        import mitsuba as mi
+        try:
+            bitmap = mi.Bitmap(path)
+        except Exception:
+            raise CompareError(f"{path}: not a readable {ext[1:].upper()} file") from None
+        linear = bitmap.convert(mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.Float32,
+                                srgb_gamma=False)
+        return np.array(linear, dtype=np.float64)
+
+
+def check_type(path: str) -> str:
+    """The extension of an input image; CompareError for an unknown type."""
+    ext = os.path.splitext(path)[1].lower()
+    if ext not in HDR_TYPES + LDR_TYPES:
+        raise CompareError(f"{path}: unknown image type {ext or '(none)'!r}; valid: "
+                           f"{', '.join(HDR_TYPES + LDR_TYPES)}")
+    return ext
+
+
+def default_flip_mode(paths: list[str]) -> str:
+    """'hdr' if any input is an HDR file type (EXR), 'ldr' if all are PNG/JPEG."""
+    return "ldr" if all(os.path.splitext(p)[1].lower() in LDR_TYPES for p in paths) else "hdr"
+
+
+def finite(image: np.ndarray) -> np.ndarray:
+    """The image with NaN and Inf values set to 0 (for pictures of masked inputs)."""
+    return np.where(np.isfinite(image), image, 0.0)
+
+
+def nonfinite(image: np.ndarray) -> np.ndarray:
+    """(H, W) mask of the pixels with a NaN or Inf channel."""
+    return ~np.isfinite(image).all(axis=-1)
+
+
+def refuse_nonfinite(image: np.ndarray, path: str) -> None:
+    bad = nonfinite(image)
     if bad.any():
         nan = int(np.isnan(image).any(axis=-1).sum())
         raise CompareError(f"{path}: {int(bad.sum())} pixels are not finite "
-                           f"({nan} NaN, {int(bad.sum()) - nan} Inf)")
-    return image
+                           f"({nan} NaN, {int(bad.sum()) - nan} Inf); "
+                           "--mask-nonfinite leaves them out")
+
+
+def require_reports() -> None:
+    """Import the report dependencies now, so that a plain install (without the
+    ``reports`` extra) fails before any work: ModuleNotFoundError names the module."""
+    import flip_evaluator  # noqa: F401
+    import matplotlib  # noqa: F401
+    import scipy  # noqa: F401
 
 
 def check_pair(ref: np.ndarray, test: np.ndarray, ref_path: str, test_path: str) -> None:
@@ -96,13 +165,20 @@ def crop(image: np.ndarray, region: tuple[int, int, int, int] | None) -> np.ndar
 #  Metrics
 # ----------------------------------------------------------------------------
 
-def _errors(r: np.ndarray, t: np.ndarray, axis) -> dict:
+def psnr_peak(ref: np.ndarray, ldr: bool = False) -> float:
+    """The one PSNR peak: 1 for LDR inputs, else max(ref) over every channel
+    (1 for a black reference)."""
+    if ldr:
+        return 1.0
+    peak = float(np.max(ref)) if ref.size else 0.0
+    return peak if peak > 0 else 1.0
+
+
+def _errors(r: np.ndarray, t: np.ndarray, axis, peak: float) -> dict:
     d = t - r
     mse = np.mean(d * d, axis=axis)
     denom = np.abs(t) + np.abs(r)
     smape_terms = np.where(denom > 0, 2 * np.abs(d) / np.where(denom > 0, denom, 1.0), 0.0)
-    peak = np.max(r, axis=axis)
-    peak = np.where(peak > 0, peak, 1.0)
     with np.errstate(divide="ignore"):
         psnr = np.where(mse > 0, 10 * np.log10(peak * peak / np.where(mse > 0, mse, 1.0)), np.inf)
     return {
@@ -116,31 +192,60 @@ def _errors(r: np.ndarray, t: np.ndarray, axis) -> dict:
     }
 
 
-def flip(ref: np.ndarray, test: np.ndarray) -> tuple[float, np.ndarray, str]:
-    """Mean FLIP error, the error map (H, W) and the mode used."""
+def flip(ref: np.ndarray, test: np.ndarray, mode: str = "hdr") -> tuple[float, np.ndarray]:
+    """Mean FLIP error and the (H, W) error map, in ``mode`` 'hdr' (linear
+    values) or 'ldr' (clamped to [0, 1] and sRGB-encoded)."""
     import flip_evaluator
 
-    hdr = max(ref.max(), test.max()) > 1.0
-    if hdr:
-        error_map, mean, _ = flip_evaluator.evaluate(
-            np.maximum(ref, 0).astype(np.float32), np.maximum(test, 0).astype(np.float32),
-            "HDR", applyMagma=False)
+    if mode not in FLIP_MODES:
+        raise CompareError(f"unknown FLIP mode {mode!r}; valid: {', '.join(FLIP_MODES)}")
+    if mode == "hdr":
+        r, t = np.maximum(ref, 0).astype(np.float32), np.maximum(test, 0).astype(np.float32)
+        exposures = {}
+        if not (r > 0).any():
+            # HDR-FLIP takes its exposure range from the reference and aborts the
+            # process on a black one: take the range from the test image instead.
+            if not (t > 0).any():
+                return 0.0, np.zeros(ref.shape[:2])          # both black: identical
+            _, _, found = flip_evaluator.evaluate(t, t, "HDR", applyMagma=False)
+            exposures = {k: found[k] for k in ("startExposure", "stopExposure")}
+        error_map, mean, _ = flip_evaluator.evaluate(r, t, "HDR", applyMagma=False,
+                                                     parameters=exposures)
     else:
         encode = lambda x: tonemap.srgb_encode(np.clip(x, 0, 1)).astype(np.float32)
         error_map, mean, _ = flip_evaluator.evaluate(encode(ref), encode(test), "LDR",
                                                      inputsRGB=True, applyMagma=False)
-    return float(mean), np.asarray(error_map).reshape(ref.shape[:2]), "HDR" if hdr else "LDR"
+    return float(mean), np.asarray(error_map, dtype=np.float64).reshape(ref.shape[:2])
 
 
-def metrics(ref: np.ndarray, test: np.ndarray, with_flip: bool = True) -> dict:
-    """Every metric, overall and per channel (plain floats)."""
-    overall = {k: float(v) for k, v in _errors(ref, test, axis=None).items()}
-    per = _errors(ref.reshape(-1, 3), test.reshape(-1, 3), axis=0)
+def metrics(ref: np.ndarray, test: np.ndarray, with_flip: bool = True, flip_mode: str = "hdr",
+            peak: float | None = None, mask: np.ndarray | None = None) -> dict:
+    """Every metric, overall and per channel (plain floats). ``mask`` (H, W):
+    the pixels to leave out. ``peak``: the PSNR peak (default psnr_peak(ref))."""
+    keep = np.ones(ref.shape[:2], bool) if mask is None else ~mask
+    r, t = ref[keep].reshape(-1, 3), test[keep].reshape(-1, 3)
+    if not len(r):
+        raise CompareError("no pixel is left to compare (every pixel is masked)")
+    peak = psnr_peak(r) if peak is None else peak
+    per = _errors(r, t, axis=0, peak=peak)
+    overall = {k: float(v) for k, v in _errors(r, t, axis=None, peak=peak).items()}
     channels = {c: {k: float(v[i]) for k, v in per.items()} for i, c in enumerate(CHANNELS)}
-    result = {**overall, "channels": channels}
+    result = {**overall, "psnr_peak": peak, "channels": channels,
+              "masked_pixels": int((~keep).sum())}
     if with_flip:
-        result["flip"], _, result["flip_mode"] = flip(ref, test)
+        result["flip"], _ = masked_flip(ref, test, flip_mode, mask)
+        result["flip_mode"] = flip_mode
     return result
+
+
+def masked_flip(ref: np.ndarray, test: np.ndarray, mode: str,
+                mask: np.ndarray | None) -> tuple[float, np.ndarray]:
+    """FLIP with masked pixels set to 0 in both images and left out of the mean."""
+    if mask is None or not mask.any():
+        return flip(ref, test, mode)
+    clean = lambda x: np.where(mask[..., None], 0.0, x)
+    _, error_map = flip(clean(ref), clean(test), mode)
+    return float(error_map[~mask].mean()), np.where(mask, 0.0, error_map)
 
 
 def verdict(m: dict, thresholds: dict[str, float]) -> list[str]:
@@ -161,39 +266,78 @@ def verdict(m: dict, thresholds: dict[str, float]) -> list[str]:
 #  Pictures
 # ----------------------------------------------------------------------------
 
-def _save_map(path: str, data: np.ndarray, cmap: str, vmin: float, vmax: float, label: str) -> None:
+def robust_span(values: np.ndarray, percentile: float = PERCENTILE) -> float:
+    """The scale of an error picture: the given percentile of |values| (not the
+    single largest error, which would make every other pixel look black)."""
+    finite = np.abs(values[np.isfinite(values)])
+    if not finite.size:
+        return 1.0
+    span = float(np.percentile(finite, percentile))
+    return span if span > 0 else (float(finite.max()) or 1.0)
+
+
+def _save_map(path: str, data: np.ndarray, cmap: str, vmin: float, vmax: float, label: str,
+              over: str | None = None, under: str | None = None) -> None:
+    """An error map with a colour bar; values beyond [vmin, vmax] drawn in the
+    ``over``/``under`` colours, shown as the colour bar's end triangles."""
+    import matplotlib
     from matplotlib.figure import Figure    # no pyplot: no global backend change
 
+    colours = matplotlib.colormaps[cmap].with_extremes(over=over, under=under)
+    extend = {(True, True): "both", (True, False): "max", (False, True): "min"}.get(
+        (bool(over), bool(under)), "neither")
     h, w = data.shape
-    fig = Figure(figsize=(4.8, 4.8 * h / w + 0.3), dpi=100)
+    fig = Figure(figsize=(4.2, 4.2 * h / w + 0.5), dpi=100)
     ax = fig.subplots()
-    im = ax.imshow(data, cmap=cmap, vmin=vmin, vmax=vmax, interpolation="nearest")
+    im = ax.imshow(data, cmap=colours, vmin=vmin, vmax=vmax, interpolation="nearest")
     ax.set_axis_off()
-    fig.colorbar(im, ax=ax, fraction=0.046, pad=0.04, label=label)
+    bar = fig.colorbar(im, ax=ax, fraction=0.046, pad=0.04, extend=extend)
+    bar.set_label(label, fontsize=9)
+    bar.ax.tick_params(labelsize=8)
     fig.savefig(path, bbox_inches="tight")
 
 
 def pictures(directory: str, prefix: str, ref: np.ndarray, test: np.ndarray,
              operator: str, flip_map: np.ndarray | None,
              ref_name: str = "reference.png") -> dict[str, str]:
-    """Write the report's PNGs (the reference once, as ref_name); returns {kind: file name}."""
+    """Write the report's PNGs (the reference once, as ref_name); returns {kind: file name}.
+    Difference and relative error are scaled to their 99th percentile; larger
+    values are drawn in yellow (positive) and cyan (negative), and counted in
+    the colour bar's label."""
     files = {"reference": ref_name, "test": f"{prefix}_test.png"}
     if not os.path.exists(os.path.join(directory, files["reference"])):
         tonemap.write_png(os.path.join(directory, files["reference"]), ref, operator)
     tonemap.write_png(os.path.join(directory, files["test"]), test, operator)
-    diff = (test - ref).mean(axis=-1)
-    span = float(np.max(np.abs(diff))) or 1.0
+    diff = finite((test - ref).mean(axis=-1))
+    span = robust_span(diff)
+    clipped = int((np.abs(diff) > span).sum())
     files["difference"] = f"{prefix}_difference.png"
     _save_map(os.path.join(directory, files["difference"]), diff, "RdBu_r", -span, span,
-              "test − reference (channel mean)")
-    rel = (np.abs(test - ref) / (np.abs(ref) + 0.01)).mean(axis=-1)
+              f"test − reference (channel mean); {clipped} px beyond ±{span:.3g}",
+              over="yellow", under="cyan")
+    rel = finite((np.abs(test - ref) / (np.abs(ref) + 0.01)).mean(axis=-1))
+    rspan = robust_span(rel)
     files["relative"] = f"{prefix}_relative.png"
-    _save_map(os.path.join(directory, files["relative"]), rel, "viridis", 0.0,
-              float(rel.max()) or 1.0, "|t − r| / (r + 0.01)")
+    _save_map(os.path.join(directory, files["relative"]), rel, "viridis", 0.0, rspan,
+              f"|t − r| / (r + 0.01); {int((rel > rspan).sum())} px beyond {rspan:.3g}",
+              over="magenta")
     if flip_map is not None:
         files["flip"] = f"{prefix}_flip.png"
         _save_map(os.path.join(directory, files["flip"]), flip_map, "magma", 0.0, 1.0, "FLIP")
     return files
+
+
+def write_layers(path: str, layers: dict[str, np.ndarray]) -> None:
+    """Write {layer: (H, W, 3) or (H, W) image} as one multi-layer float32 EXR
+    (channels ``layer.R/G/B`` or ``layer.Y``), atomically."""
+    channels = {}
+    for layer, image in layers.items():
+        image = np.asarray(image, dtype=np.float32)
+        if image.ndim == 2:
+            channels[f"{layer}.Y"] = image
+        else:
+            channels.update({f"{layer}.{c}": image[..., i] for i, c in enumerate(CHANNELS)})
+    exr.write_channels(path, channels)
 
 
 # ----------------------------------------------------------------------------
@@ -205,25 +349,33 @@ class Comparison:
     test_path: str
     metrics: dict
     failures: list[str]
+    thresholds: bool = True       # were any thresholds given?
     files: dict[str, str] = field(default_factory=dict)
 
     @property
     def passed(self) -> bool:
         return not self.failures
 
+    @property
+    def verdict(self) -> str:
+        """'PASS', 'FAIL', or 'no thresholds'."""
+        if not self.thresholds:
+            return "no thresholds"
+        return "PASS" if self.passed else "FAIL"
+
 
 METRIC_ORDER = ["mse", "rmse", "relmse", "mae", "smape", "max_abs", "psnr", "flip"]
 
 
 def _html(ref_path: str, comparisons: list[Comparison], thresholds: dict, operator: str,
-          region) -> str:
+          region, flip_mode: str, masked: bool) -> str:
     esc = html.escape
+    css = {"PASS": "pass", "FAIL": "fail", "no thresholds": "none"}
     rows = []
     for c in comparisons:
-        status = "PASS" if c.passed else "FAIL"
         cells = "".join(f"<td>{c.metrics[k]:.6g}</td>" for k in METRIC_ORDER)
-        rows.append(f"<tr class='{status.lower()}'><td>{esc(c.test_path)}</td>{cells}"
-                    f"<td>{status}</td></tr>")
+        rows.append(f"<tr class='{css[c.verdict]}'><td>{esc(c.test_path)}</td>{cells}"
+                    f"<td>{c.verdict}</td></tr>")
     header = "".join(f"<th>{k}</th>" for k in METRIC_ORDER)
     limits = ", ".join(f"{THRESHOLDS[k][0]} {THRESHOLDS[k][1]} {v:g}"
                        for k, v in thresholds.items() if v is not None) or "none"
@@ -236,13 +388,19 @@ def _html(ref_path: str, comparisons: list[Comparison], thresholds: dict, operat
         figures = "".join(
             f"<figure><img src='{esc(name)}' alt='{kind}'><figcaption>{kind}</figcaption></figure>"
             for kind, name in c.files.items())
-        failures = ("<p class='fail'>Failed: " + esc("; ".join(c.failures)) + "</p>"
-                    if c.failures else "<p class='pass'>Passed every threshold.</p>")
+        if c.verdict == "no thresholds":
+            text = "<p class='none'>No thresholds given: no verdict.</p>"
+        elif c.failures:
+            text = "<p class='fail'>Failed: " + esc("; ".join(c.failures)) + "</p>"
+        else:
+            text = "<p class='pass'>Passed every threshold.</p>"
+        left_out = (f" {c.metrics['masked_pixels']} non-finite pixels left out."
+                    if masked else "")
         sections.append(
-            f"<section><h2>{esc(c.test_path)}</h2>{failures}"
+            f"<section><h2>{esc(c.test_path)}</h2>{text}"
             f"<table><tr><th>channel</th>{''.join(f'<th>{k}</th>' for k in METRIC_ORDER[:-1])}</tr>"
-            f"{per}</table><p>FLIP mode: {c.metrics['flip_mode']}</p>"
-            f"<div class='figs'>{figures}</div></section>")
+            f"{per}</table><p>PSNR peak {c.metrics['psnr_peak']:.6g} (overall and every "
+            f"channel).{left_out}</p><div class='figs'>{figures}</div></section>")
     crop_text = f"crop {','.join(map(str, region))}" if region else "whole image"
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>mi-brdfs compare</title>
@@ -252,86 +410,104 @@ table {{ border-collapse: collapse; margin: 1em 0; }}
 td, th {{ border: 1px solid #ccc; padding: 0.25em 0.6em; text-align: right; }}
 tr.fail td:last-child, p.fail {{ color: #b00; font-weight: bold; }}
 tr.pass td:last-child, p.pass {{ color: #070; }}
-.figs {{ display: flex; flex-wrap: wrap; gap: 1em; }}
-figure {{ margin: 0; }} figure img {{ width: 320px; image-rendering: pixelated; }}
+tr.none td:last-child, p.none {{ color: #555; }}
+.figs {{ display: flex; flex-wrap: wrap; gap: 1em; align-items: flex-start; }}
+figure {{ margin: 0; }} figure img {{ width: 360px; }}
 </style></head><body>
 <h1>Comparison against {esc(ref_path)}</h1>
-<p>Tone mapping for display: {esc(operator)}; region: {crop_text}; thresholds: {esc(limits)}.</p>
+<p>FLIP mode: {flip_mode.upper()}-FLIP; tone mapping for display: {esc(operator)}; region:
+{crop_text}; thresholds: {esc(limits)}. All images and error maps as layers of one EXR:
+<a href="maps.exr">maps.exr</a>.</p>
 <table><tr><th>test image</th>{header}<th>verdict</th></tr>{''.join(rows)}</table>
 {''.join(sections)}
 </body></html>
 """
 
 
-def _csv_rows(comparisons: list[Comparison]):
+def _csv_rows(comparisons: list[Comparison]) -> Iterator[list]:
     yield ["test", "channel", *METRIC_ORDER, "verdict"]
     for c in comparisons:
-        status = "pass" if c.passed else "fail"
-        yield [c.test_path, "all", *[c.metrics[k] for k in METRIC_ORDER], status]
+        yield [c.test_path, "all", *[c.metrics[k] for k in METRIC_ORDER], c.verdict]
         for ch in CHANNELS:
             yield [c.test_path, ch, *[c.metrics["channels"][ch][k] for k in METRIC_ORDER[:-1]],
-                   "", status]
+                   "", c.verdict]
+
+
+def _write_text(path: str, write) -> None:
+    with open(path, "w", newline="") as f:
+        write(f)
 
 
 def compare(reference: str, tests: list[str], out_dir: str, thresholds: dict | None = None,
             region: tuple[int, int, int, int] | None = None,
-            operator: str = "clamp") -> list[Comparison]:
-    """Compare every test EXR with the reference and write the report to out_dir
-    (atomically). Raises CompareError on bad input, before writing anything."""
+            operator: str = "clamp", flip_mode: str | None = None,
+            mask_nonfinite: bool = False) -> list[Comparison]:
+    """Compare every test image with the reference and write the report to
+    out_dir. Raises CompareError (bad input) or outputs.OutputError (a report
+    folder that cannot be used) before comparing or writing anything."""
     thresholds = {k: v for k, v in (thresholds or {}).items() if v is not None}
     for key in thresholds:
         if key not in THRESHOLDS:
             raise CompareError(f"unknown threshold {key!r}; valid: {', '.join(THRESHOLDS)}")
     if operator not in tonemap.OPERATORS:
         raise CompareError(f"unknown tone-mapping operator {operator!r}")
+    if flip_mode is not None and flip_mode not in FLIP_MODES:
+        raise CompareError(f"unknown FLIP mode {flip_mode!r}; valid: {', '.join(FLIP_MODES)}")
+    require_reports()
+    inputs = [reference, *tests]
+    for path in inputs:
+        check_type(path)
+    outputs.check_report_dir(out_dir, inputs)
+    flip_mode = flip_mode or default_flip_mode(inputs)
+    ldr = default_flip_mode(inputs) == "ldr"            # every input is PNG/JPEG
+
     full_ref = load(reference)
-    ref = crop(full_ref, region)
     images = []
     for path in tests:
         image = load(path)
         check_pair(full_ref, image, reference, path)
-        images.append((path, crop(image, region)))
+        images.append((path, image))
+    if not mask_nonfinite:
+        for path, image in [(reference, full_ref), *images]:
+            refuse_nonfinite(image, path)
+    ref = crop(full_ref, region)
+    images = [(path, crop(image, region)) for path, image in images]
 
-    parent = os.path.dirname(os.path.abspath(out_dir)) or "."
-    if not os.path.isdir(parent):
-        raise CompareError(f"cannot write {out_dir}: directory {parent} does not exist")
-    tmp = tempfile.mkdtemp(prefix=".tmp-report-", dir=parent)
-    try:
-        comparisons = []
+    comparisons, layers = [], {"reference": finite(ref)}
+    ref_mask = nonfinite(ref)
+    with outputs.report_dir(out_dir, "compare", inputs) as tmp:
         for i, (path, image) in enumerate(images):
-            m = metrics(ref, image, with_flip=False)
-            m["flip"], flip_map, m["flip_mode"] = flip(ref, image)
-            c = Comparison(path, m, verdict(m, thresholds))
-            c.files = pictures(tmp, f"test{i}", ref, image, operator, flip_map)
+            mask = (ref_mask | nonfinite(image)) if mask_nonfinite else None
+            m = metrics(ref, image, with_flip=False, mask=mask,
+                        peak=1.0 if ldr else psnr_peak(ref[~ref_mask]))
+            m["flip"], flip_map = masked_flip(ref, image, flip_mode, mask)
+            m["flip_mode"] = flip_mode
+            c = Comparison(path, m, verdict(m, thresholds), thresholds=bool(thresholds))
+            clean_ref, clean_test = finite(ref), finite(image)
+            c.files = pictures(tmp, f"test{i}", clean_ref, clean_test, operator, flip_map)
             comparisons.append(c)
-        with open(os.path.join(tmp, "metrics.json"), "w") as f:
-            json.dump({"reference": reference, "region": region, "thresholds": thresholds,
-                       "tests": [{"path": c.test_path, "passed": c.passed,
-                                  "failures": c.failures, "metrics": c.metrics}
-                                 for c in comparisons]}, f, indent=2)
-        with open(os.path.join(tmp, "metrics.csv"), "w", newline="") as f:
-            csv.writer(f).writerows(_csv_rows(comparisons))
-        with open(os.path.join(tmp, "index.html"), "w") as f:
-            f.write(_html(reference, comparisons, thresholds, operator, region))
-        _replace_dir(tmp, out_dir)
-    finally:
-        if os.path.isdir(tmp):
-            shutil.rmtree(tmp)
+            layers[f"test{i}.image"] = clean_test
+            layers[f"test{i}.difference"] = clean_test - clean_ref
+            layers[f"test{i}.relative"] = np.abs(clean_test - clean_ref) / (np.abs(clean_ref) + 0.01)
+            layers[f"test{i}.flip"] = flip_map
+        write_layers(os.path.join(tmp, "maps.exr"), layers)
+        _write_text(os.path.join(tmp, "metrics.json"), lambda f: json.dump(
+            {"reference": reference, "region": region, "thresholds": thresholds,
+             "flip_mode": flip_mode, "psnr_peak": "1 (LDR inputs)" if ldr else "max(reference)",
+             "mask_nonfinite": mask_nonfinite,
+             "tests": [{"path": c.test_path, "verdict": c.verdict,
+                        "passed": c.passed if thresholds else None,
+                        "failures": c.failures, "metrics": c.metrics} for c in comparisons]},
+            f, indent=2))
+        _write_text(os.path.join(tmp, "metrics.csv"),
+                    lambda f: csv.writer(f).writerows(_csv_rows(comparisons)))
+        _write_text(os.path.join(tmp, "index.html"),
+                    lambda f: f.write(_html(reference, comparisons, thresholds, operator, region,
+                                            flip_mode, mask_nonfinite)))
     return comparisons
 
 
-def _replace_dir(src: str, dst: str) -> None:
-    """Move the finished report into place, replacing an older one."""
-    if os.path.exists(dst):
-        old = dst.rstrip("/") + ".old-" + os.path.basename(src)
-        os.rename(dst, old)
-        os.rename(src, dst)
-        shutil.rmtree(old)
-    else:
-        os.rename(src, dst)
-
-
-def parse_region(text: str | None):
+def parse_region(text: str | None) -> tuple[int, int, int, int] | None:
     if not text:
         return None
     try:

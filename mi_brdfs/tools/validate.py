@@ -20,23 +20,33 @@ Sections:
 4. **Lobes** — eval (f·cos theta_o) in the plane of incidence for several
    incident angles, both modes, as polar plots.
 
-The report is written into a temporary directory and moved into place when
-complete. ``--quick`` runs a reduced grid at reduced sizes (for CI).
+The report opens with a summary: every check (each equivalence, each furnace
+row's "albedo <= 1" and "render agrees with quadrature", each chi-square test)
+with its status: pass, fail, or a documented known limitation (a failure that
+:data:`KNOWN_LIMITATIONS` names, with the reason; the README lists the same
+limitations with their measured numbers). ``mi-brdfs validate`` exits with
+status 1 when a check fails that is not a documented limitation. New rows in
+the catalog's sections get their checks without any change here.
+
+The report folder is new, empty or a previous report (never a folder with
+other files, see :mod:`.outputs`); it is written into a temporary folder and
+moved into place when complete. ``--quick`` runs a reduced grid at reduced
+sizes (for CI).
 """
 from __future__ import annotations
 
+import fnmatch
 import html
 import json
 import math
 import os
-import shutil
-import tempfile
 import time
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
-from . import analysis, catalog, compare
+from . import analysis, catalog, compare, outputs
 
 MODES = ("hdr", "scanline")
 ALPHA = 0.01                      # significance level of every statistical test
@@ -69,21 +79,24 @@ FULL = Size(res=128, passes=32, spp=64, furnace_spp=4096, quad=(1024, 4096),
 ETA = 1.5
 F0_GLASS = ((ETA - 1) / (ETA + 1)) ** 2
 
-EQUIVALENCES = [
-    ("lambert vs diffuse", {"type": "lambert", "reflectance": 0.7},
+EQUIVALENCES = [              # (check id, title, ours, built-in, expectation)
+    ("lambert-diffuse", "lambert vs diffuse", {"type": "lambert", "reflectance": 0.7},
      {"type": "diffuse", "reflectance": 0.7},
      "identical up to noise"),
-    ("cook_torrance (k=0, f0=1, smith, ggx) vs roughconductor (ggx)",
+    ("cook_torrance-roughconductor-ggx",
+     "cook_torrance (k=0, f0=1, smith, ggx) vs roughconductor (ggx)",
      {"type": "cook_torrance", "k": 0.0, "f0": 1.0, "geometry": "smith", "distribution": "ggx",
       "alpha": 0.3},
      {"type": "roughconductor", "distribution": "ggx", "alpha": 0.3},
      "identical up to noise"),
-    ("cook_torrance (k=0, f0=1, smith, beckmann) vs roughconductor (beckmann)",
+    ("cook_torrance-roughconductor-beckmann",
+     "cook_torrance (k=0, f0=1, smith, beckmann) vs roughconductor (beckmann)",
      {"type": "cook_torrance", "k": 0.0, "f0": 1.0, "geometry": "smith",
       "distribution": "beckmann", "alpha": 0.3},
      {"type": "roughconductor", "distribution": "beckmann", "alpha": 0.3},
      "identical up to the Beckmann G1 fit (Mitsuba's rational fit, within 0.35 % per G1)"),
-    (f"cook_torrance (k=0, f0={F0_GLASS:.2f}, smith, ggx) vs roughplastic (diffuse 0)",
+    ("cook_torrance-roughplastic",
+     f"cook_torrance (k=0, f0={F0_GLASS:.2f}, smith, ggx) vs roughplastic (diffuse 0)",
      {"type": "cook_torrance", "k": 0.0, "f0": F0_GLASS, "geometry": "smith",
       "distribution": "ggx", "alpha": 0.3},
      {"type": "roughplastic", "distribution": "ggx", "alpha": 0.3, "diffuse_reflectance": 0.0,
@@ -150,16 +163,17 @@ def welch_test(a: np.ndarray, b: np.ndarray) -> dict:
 
 def equivalence_section(size: Size, out: str) -> list[dict]:
     results = []
-    for i, (title, ours, builtin, expected) in enumerate(EQUIVALENCES):
+    for i, (check_id, title, ours, builtin, expected) in enumerate(EQUIVALENCES):
         a = render_passes(_sphere_scene(ours, size.res), size.passes, size.spp, seed0=0)
         b = render_passes(_sphere_scene(builtin, size.res), size.passes, size.spp, seed0=1000)
         test = welch_test(a, b)
         ref_img, test_img = b.mean(0), a.mean(0)          # built-in, ours
         m = compare.metrics(ref_img, test_img, with_flip=False)
-        m["flip"], flip_map, m["flip_mode"] = compare.flip(ref_img, test_img)
+        m["flip"], flip_map = compare.flip(ref_img, test_img, "hdr")     # linear renders
+        m["flip_mode"] = "hdr"
         files = compare.pictures(out, f"eq{i}", ref_img, test_img, "clamp", flip_map,
                                  ref_name=f"eq{i}_builtin.png")
-        results.append({"title": title, "expected": expected, "test": test,
+        results.append({"id": check_id, "title": title, "expected": expected, "test": test,
                         "metrics": {k: v for k, v in m.items() if k != "channels"},
                         "files": files})
     return results
@@ -206,7 +220,7 @@ def furnace_section(size: Size, out: str, models: dict) -> list[dict]:
     rows = []
     for name, configs in models.items():
         for label, base in configs:
-            fig = Figure(figsize=(5, 3.4), dpi=90)
+            fig = Figure(figsize=(5.2, 3.4), dpi=100)
             ax = fig.subplots()
             for mode, colour in zip(MODES, ("C0", "C3")):
                 config = {**base, "mode": mode}
@@ -282,22 +296,146 @@ def lobe_section(out: str, models: dict, angles=(0, 30, 60, 80)) -> list[dict]:
 
     rows = []
     for name, base in models.items():
-        fig = Figure(figsize=(8, 3.6), dpi=90)
+        fig = Figure(figsize=(8.4, 3.0), dpi=100)
         axes = fig.subplots(1, 2, subplot_kw={"projection": "polar"})
         for ax, mode in zip(axes, MODES):
             analysis.polar_lobes(ax, mi.load_dict({**base, "mode": mode}), angles,
                                  f"{name} ({mode})")
-        axes[1].legend(fontsize=7, loc="lower right", bbox_to_anchor=(1.35, 0.0))
-        fig.tight_layout()
+        axes[1].legend(fontsize=8, loc="center left", bbox_to_anchor=(1.02, 0.5))
+        fig.subplots_adjust(left=0.02, right=0.84, bottom=0.02, top=0.88, wspace=0.12)
         file = f"lobe_{name}.png"
-        fig.savefig(os.path.join(out, file))
+        fig.savefig(os.path.join(out, file), bbox_inches="tight", pad_inches=0.1)
         rows.append({"model": name, "plot": file})
     return rows
 
 
 # ----------------------------------------------------------------------------
+#  The checks and their summary
+# ----------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Known:
+    """A documented known limitation: why the check fails, and the largest
+    measured value for which that explanation is accepted (None: any)."""
+    reason: str
+    up_to: float | None = None
+
+
+# Check id pattern (fnmatch, case-sensitive) -> the documented reason it fails.
+# Check ids: "equivalence/<id>", "furnace/<model>/<configuration>/<mode>/energy"
+# (albedo <= 1) and ".../render" (rendering agrees with quadrature),
+# "sampling/<model>/<configuration>/<theta_i>" (chi-square). A pattern only
+# matters when its check fails; the README's "Known limitations" has the numbers.
+KNOWN_LIMITATIONS: dict[str, Known] = {
+    "furnace/*/*/scanline/energy": Known(
+        "the scan-line modes are the lecture's formulas, clamped per lobe, not energy "
+        "conserving by design"),
+    "furnace/toon/*/hdr/energy": Known(
+        "toon is stylised: its hdr mode makes no energy claim (albedo 3.77 with the defaults)",
+        up_to=4.0),
+    "furnace/cook_torrance/Blinn D, Smith*/hdr/energy": Known(
+        "Beckmann's Smith G1 does not fit the Blinn distribution at high roughness: the albedo "
+        "exceeds 1 near grazing incidence (1.30 at alpha = 1, 89 degrees)", up_to=1.35),
+    "furnace/oren_nayar/*/hdr/energy": Known(
+        "the lecture's qualitative Oren-Nayar model reflects slightly more than it receives "
+        "near grazing incidence (1.4 % at sigma = 0.2)", up_to=1.02),
+    "equivalence/cook_torrance-roughplastic": Known(
+        "Schlick's approximation differs from roughplastic's exact dielectric Fresnel at "
+        "grazing angles (the rim)"),
+    "equivalence/cook_torrance-roughconductor-beckmann": Known(
+        "Mitsuba's roughconductor uses a rational fit of Beckmann's G1 (within 0.35 % per G1)"),
+}
+
+STATUSES = ("fail", "known", "pass")      # the summary's order
+
+
+def known_limitation(check_id: str, value: float | None) -> Known | None:
+    for pattern, known in KNOWN_LIMITATIONS.items():
+        if fnmatch.fnmatchcase(check_id, pattern) and (
+                known.up_to is None or value is None or value <= known.up_to):
+            return known
+    return None
+
+
+def _check(check_id: str, section: str, what: str, passed: bool, measured: str,
+           value: float | None = None) -> dict:
+    known = None if passed else known_limitation(check_id, value)
+    status = "pass" if passed else "known" if known else "fail"
+    return {"id": check_id, "section": section, "what": what, "status": status,
+            "measured": measured, "reason": known.reason if known else ""}
+
+
+def checks(results: dict) -> list[dict]:
+    """Every check of a validation run, from its sections' rows."""
+    out = []
+    for r in results.get("equivalence", []):
+        t = r["test"]
+        out.append(_check(f"equivalence/{r['id']}", "built-in equivalence",
+                          f"{r['title']}: identical up to noise", t["identical"],
+                          f"{t['significant_pixels']} of {t['pixels']} pixels differ "
+                          f"significantly; mean relative difference "
+                          f"{100 * t['mean_relative_difference']:.3f} %",
+                          t["mean_relative_difference"]))
+    for r in results.get("furnace", []):
+        base = f"furnace/{r['model']}/{r['config']}/{r['mode']}"
+        name = f"{r['model']} ({r['config']}; {r['mode']})"
+        out.append(_check(f"{base}/energy", "white furnace", f"{name}: albedo ≤ 1",
+                          not r["exceeds_1"], f"max {r['max']:.4f} at {r['max_at']:g}°", r["max"]))
+        limit = 0.01 * max(1.0, r["max"])
+        out.append(_check(f"{base}/render", "white furnace",
+                          f"{name}: rendered albedo agrees with quadrature",
+                          r["render_vs_quadrature"] <= limit,
+                          f"largest |render − quadrature| {r['render_vs_quadrature']:.4f} "
+                          f"(limit {limit:.4f})", r["render_vs_quadrature"]))
+    for r in results.get("sampling", []):
+        out.append(_check(f"sampling/{r['model']}/{r['config']}/{r['theta']:g}", "sampling",
+                          f"{r['model']} ({r['config']}): χ² at θ_i = {r['theta']:g}°",
+                          r["passed"], f"p = {r['p_value']:.3g}", r["p_value"]))
+    return out
+
+
+def summary(check_list: list[dict]) -> dict[str, int]:
+    return {status: sum(c["status"] == status for c in check_list) for status in STATUSES}
+
+
+# ----------------------------------------------------------------------------
 #  The report
 # ----------------------------------------------------------------------------
+
+LABELS = {"pass": "pass", "fail": "FAIL", "known": "known limitation"}
+
+
+def _summary_html(results: dict) -> str:
+    """The summary at the top: counts per section and status, every check that
+    did not pass (with the documented reason), and all checks on demand."""
+    esc = html.escape
+    check_list, s = results["checks"], results["summary"]
+    sections = list(dict.fromkeys(c["section"] for c in check_list))
+    counts = "".join(
+        f"<tr><td>{esc(sec)}</td>" + "".join(
+            f"<td>{sum(c['section'] == sec and c['status'] == st for c in check_list)}</td>"
+            for st in ("pass", "known", "fail")) + "</tr>" for sec in sections)
+
+    def rows(items):
+        return "".join(
+            f"<tr class='{c['status']}'><td class='status'>{LABELS[c['status']]}</td>"
+            f"<td>{esc(c['what'])}</td><td>{esc(c['measured'])}</td>"
+            f"<td>{esc(c['reason'])}</td></tr>" for c in items)
+    head = "<tr><th>status</th><th>check</th><th>measured</th><th>documented reason</th></tr>"
+    order = {st: i for i, st in enumerate(STATUSES)}
+    not_passed = sorted((c for c in check_list if c["status"] != "pass"),
+                        key=lambda c: order[c["status"]])
+    verdict = ("<p class='bad'>" + f"{s['fail']} check(s) FAIL." if s["fail"] else
+               "<p class='good'>Every check passes or is a documented known limitation.")
+    return (f"<h2>Summary</h2>{verdict} {len(check_list)} checks: {s['pass']} pass, "
+            f"{s['known']} documented known limitations, {s['fail']} fail.</p>"
+            "<table class='summary'><tr><th>section</th><th>pass</th>"
+            f"<th>known limitation</th><th>fail</th></tr>{counts}</table>"
+            + (f"<table class='summary'>{head}{rows(not_passed)}</table>" if not_passed else "")
+            + f"<details><summary>All {len(check_list)} checks</summary>"
+            f"<table class='summary'>{head}{rows(sorted(check_list, key=lambda c: order[c['status']]))}"
+            "</table></details>")
+
 
 def _html(results: dict) -> str:
     esc = html.escape
@@ -309,11 +447,18 @@ table {{ border-collapse: collapse; margin: 1em 0; }}
 td, th {{ border: 1px solid #ccc; padding: 0.2em 0.5em; text-align: right; }}
 td:first-child, td:nth-child(2) {{ text-align: left; }}
 .bad {{ color: #b00; font-weight: bold; }} .good {{ color: #070; }}
-.figs {{ display: flex; flex-wrap: wrap; gap: 0.8em; }} .figs img {{ width: 300px; image-rendering: pixelated; }}
+.figs {{ display: flex; flex-wrap: wrap; gap: 0.8em; align-items: flex-start; }}
+.figs img {{ max-width: 100%; height: auto; }}
+.figs img.render {{ width: 240px; image-rendering: pixelated; }}
+figure {{ margin: 0; }} figcaption {{ font-size: 0.9em; }}
+tr.fail td.status {{ color: #b00; font-weight: bold; }} tr.known td.status {{ color: #a60; }}
+tr.pass td.status {{ color: #070; }}
+table.summary td {{ text-align: left; }}
 </style></head><body>
 <h1>mi_brdfs validation</h1>
 <p>{esc(results['size'])} run, {results['seconds']:.0f} s; Mitsuba {esc(results['mitsuba'])},
 variant {esc(results['variant'])}. Statistical tests at α = {ALPHA}.</p>
+{_summary_html(results)}
 <h2>1. Built-in equivalence</h2>"""]
     for r in results["equivalence"]:
         t = r["test"]
@@ -327,7 +472,10 @@ variant {esc(results['variant'])}. Statistical tests at α = {ALPHA}.</p>
             f"mean relative difference {100 * t['mean_relative_difference']:.3f} %; "
             f"RMSE {r['metrics']['rmse']:.4g}, FLIP {r['metrics']['flip']:.4g}.</p>"
             "<div class='figs'>" + "".join(
-                f"<figure><img src='{esc(f)}' alt='{k}'><figcaption>{k}</figcaption></figure>"
+                f"<figure><img src='{esc(f)}' alt='{k}'"
+                f"{' class=render' if k in ('reference', 'test') else ''}>"
+                f"<figcaption>{'built-in' if k == 'reference' else 'ours' if k == 'test' else k}"
+                "</figcaption></figure>"
                 for k, f in r["files"].items()) + "</div>")
     parts.append("<h2>2. White furnace</h2><table><tr><th>model</th><th>configuration</th>"
                  "<th>mode</th><th>max albedo</th><th>at θ_i</th><th>mean</th><th>min</th>"
@@ -363,21 +511,20 @@ variant {esc(results['variant'])}. Statistical tests at α = {ALPHA}.</p>
     return "".join(parts)
 
 
-def validate(out_dir: str, quick: bool = False, log=print) -> dict:
-    """Run every section and write the report to out_dir (atomically)."""
+def validate(out_dir: str, quick: bool = False, log: Callable[[str], None] = print) -> dict:
+    """Run every section and write the report to out_dir (a new or empty
+    folder, or a previous report: checked before any work). The results
+    include ``checks`` and their ``summary`` (counts of pass, known, fail)."""
     import mitsuba as mi
 
     import mi_brdfs  # noqa: F401  (plugins registered)
 
+    compare.require_reports()
     size = QUICK if quick else FULL
     furnace = catalog.quick(catalog.FURNACE, 2) if quick else catalog.FURNACE
     chi2 = catalog.quick(catalog.CHI2, 2) if quick else catalog.CHI2
-    parent = os.path.dirname(os.path.abspath(out_dir))
-    if not os.path.isdir(parent):
-        raise ValueError(f"cannot write {out_dir}: directory {parent} does not exist")
-    tmp = tempfile.mkdtemp(prefix=".tmp-validate-", dir=parent)
     start = time.perf_counter()
-    try:
+    with outputs.report_dir(out_dir, "validate") as tmp:
         results = {"size": "quick" if quick else "full", "mitsuba": mi.__version__,
                    "variant": mi.variant()}
         log("built-in equivalence ...")
@@ -388,13 +535,11 @@ def validate(out_dir: str, quick: bool = False, log=print) -> dict:
         results["sampling"] = sampling_section(size, chi2)
         log("lobes ...")
         results["lobes"] = lobe_section(tmp, catalog.LOBES)
+        results["checks"] = checks(results)
+        results["summary"] = summary(results["checks"])
         results["seconds"] = time.perf_counter() - start
         with open(os.path.join(tmp, "results.json"), "w") as f:
             json.dump(results, f, indent=1)
         with open(os.path.join(tmp, "index.html"), "w") as f:
             f.write(_html(results))
-        compare._replace_dir(tmp, out_dir)
-    finally:
-        if os.path.isdir(tmp):
-            shutil.rmtree(tmp)
     return results

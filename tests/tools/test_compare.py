@@ -1,4 +1,5 @@
-"""mi-brdfs compare: metrics by hand, FLIP against NVIDIA's flip command, verdicts, bad input."""
+"""mi-brdfs compare: metrics by hand, FLIP against NVIDIA's flip command, the FLIP
+mode from file types, one PSNR peak, PNG inputs, masking, verdicts, bad input."""
 import json
 import os
 import re
@@ -53,8 +54,7 @@ def test_flip_hdr_matches_flip_command(tmp_path):
     t = (r * rng.uniform(0.7, 1.3, size=r.shape)).astype(np.float32)
     exr.write_exr(str(tmp_path / "r.exr"), r)
     exr.write_exr(str(tmp_path / "t.exr"), t)
-    value, _, mode = compare.flip(r.astype(np.float64), t.astype(np.float64))
-    assert mode == "HDR"
+    value, _ = compare.flip(r.astype(np.float64), t.astype(np.float64), "hdr")
     assert value == pytest.approx(flip_cli(tmp_path / "r.exr", tmp_path / "t.exr", tmp_path), abs=2e-6)
 
 
@@ -67,8 +67,7 @@ def test_flip_ldr_matches_flip_command_on_srgb_pngs(tmp_path):
     for name, img in (("r.png", r8), ("t.png", t8)):
         _write_png8(tmp_path / name, img)
     decode = lambda v: np.where(v <= 0.04045, v / 12.92, ((v + 0.055) / 1.055) ** 2.4)
-    value, _, mode = compare.flip(decode(r8 / 255.0), decode(t8 / 255.0))
-    assert mode == "LDR"
+    value, _ = compare.flip(decode(r8 / 255.0), decode(t8 / 255.0), "ldr")
     assert value == pytest.approx(flip_cli(tmp_path / "r.png", tmp_path / "t.png", tmp_path), abs=1e-3)
 
 
@@ -101,7 +100,8 @@ def test_self_comparison_passes_with_zero_error(tmp_path):
     assert m["metrics"]["psnr"] == float("inf")
     files = set(os.listdir(tmp_path / "rep"))
     assert {"index.html", "metrics.json", "metrics.csv", "reference.png", "test0_test.png",
-            "test0_difference.png", "test0_relative.png", "test0_flip.png"} <= files
+            "test0_difference.png", "test0_relative.png", "test0_flip.png", "maps.exr",
+            ".mi-brdfs-report"} <= files
 
 
 def test_perturbed_copy_moves_metrics_and_fails_thresholds(tmp_path):
@@ -145,22 +145,156 @@ def bad_cases(tmp_path):
     nan[1, 1] = np.inf
     exr.write_exr(str(tmp_path / "nan.exr"), nan)
     (tmp_path / "text.exr").write_text("hello")
+    (tmp_path / "text.tiff").write_text("hello")
     g = str(tmp_path / "good.exr")
     return {
         "missing": ([g, str(tmp_path / "none.exr")], "no such file"),
         "not exr": ([g, str(tmp_path / "text.exr")], "not a readable EXR"),
         "resolution": ([g, str(tmp_path / "small.exr")], "is 4x2 but the reference"),
         "nan": ([g, str(tmp_path / "nan.exr")], "2 pixels are not finite (1 NaN, 1 Inf)"),
+        "type": ([g, str(tmp_path / "text.tiff")], "unknown image type '.tiff'"),
+        "flip mode": ([g, g, "--flip", "sdr"], "argument --flip: invalid choice: 'sdr'"),
+        "threshold": ([g, g, "--max-rmse", "-1"], "argument --max-rmse: invalid value -1"),
         "crop": ([g, g, "--crop", "3,3,4,4"], "outside the 4x4 image"),
     }
 
 
-@pytest.mark.parametrize("case", ["missing", "not exr", "resolution", "nan", "crop"])
+@pytest.mark.parametrize("case", ["missing", "not exr", "resolution", "nan", "crop", "type",
+                                  "flip mode", "threshold"])
 def test_bad_input(tmp_path, case):
     args, message = bad_cases(tmp_path)[case]
     out = run(*args, "-o", str(tmp_path / "rep"))
     assert out.returncode == 1
     lines = out.stderr.strip().splitlines()
     assert len(lines) == 1 and message in lines[0], out.stderr
+    assert lines[0].startswith("mi-brdfs compare: error: ")
     leftovers = [p for p in os.listdir(tmp_path) if "rep" in p]
     assert leftovers == []
+
+
+# ----------------------------------------------------------------------------
+#  The FLIP mode, the PSNR peak, PNG inputs, masking, verdicts, maps.exr
+# ----------------------------------------------------------------------------
+
+def report(tmp_path, name="rep"):
+    return json.loads((tmp_path / name / "metrics.json").read_text())
+
+
+def test_flip_mode_follows_file_types_not_pixel_values(tmp_path):
+    rng = np.random.default_rng(7)
+    r = rng.uniform(0.05, 0.9, size=(32, 32, 3))
+    t = np.clip(r + rng.normal(0, 0.05, size=r.shape), 0, 1)
+    ref, test = write_pair(tmp_path, r, t)
+    assert run(ref, test, "-o", str(tmp_path / "a")).returncode == 0
+    bright = t.copy()
+    bright[3, 3] = 1.5                                      # one pixel above 1
+    exr.write_exr(str(tmp_path / "bright.exr"), bright)
+    assert run(ref, str(tmp_path / "bright.exr"), "-o", str(tmp_path / "b")).returncode == 0
+    a, b = report(tmp_path, "a"), report(tmp_path, "b")
+    assert a["flip_mode"] == b["flip_mode"] == "hdr"
+    fa, fb = a["tests"][0]["metrics"]["flip"], b["tests"][0]["metrics"]["flip"]
+    assert abs(fb - fa) < 0.01 * fa + 1e-3                  # one pixel moves FLIP a little only
+    tonemap.write_png(str(tmp_path / "r.png"), r)
+    tonemap.write_png(str(tmp_path / "t.png"), t)
+    assert run(str(tmp_path / "r.png"), str(tmp_path / "t.png"), "-o",
+               str(tmp_path / "c")).returncode == 0
+    assert report(tmp_path, "c")["flip_mode"] == "ldr"
+    assert run(ref, test, "-o", str(tmp_path / "d"), "--flip", "ldr").returncode == 0
+    d = report(tmp_path, "d")
+    assert d["flip_mode"] == "ldr" and d["tests"][0]["metrics"]["flip"] != fa
+
+
+def test_overall_psnr_lies_between_the_channels(tmp_path):
+    rng = np.random.default_rng(8)
+    r = rng.uniform(0, 1, size=(16, 16, 3)) * [4.0, 1.0, 0.25]      # channels of unequal range
+    t = r + rng.normal(0, 1, size=r.shape) * [0.01, 0.05, 0.2]     # and unequal errors
+    m = compare.metrics(r, t, with_flip=False)
+    per = [m["channels"][c]["psnr"] for c in "RGB"]
+    assert min(per) < m["psnr"] < max(per)
+    peak = r.max()                                                  # one peak for all
+    assert m["psnr_peak"] == pytest.approx(peak)
+    for i, c in enumerate("RGB"):
+        mse = np.mean((t[..., i] - r[..., i]) ** 2)
+        assert m["channels"][c]["psnr"] == pytest.approx(10 * np.log10(peak**2 / mse))
+
+
+def test_png_inputs_are_srgb_decoded_and_peak_is_one(tmp_path):
+    rng = np.random.default_rng(9)
+    r = rng.uniform(0, 1, size=(8, 8, 3))
+    t = np.clip(r * 0.9, 0, 1)
+    for name, image in (("r.png", r), ("t.jpg", t)):
+        import mitsuba as mi
+        mi.Bitmap(np.ascontiguousarray(tonemap.to_srgb8(image)),
+                  mi.Bitmap.PixelFormat.RGB).write(str(tmp_path / name))
+    out = run(str(tmp_path / "r.png"), str(tmp_path / "t.jpg"), "-o", str(tmp_path / "rep"))
+    assert out.returncode == 0, out.stderr
+    decode = lambda v: np.where(v <= 0.04045, v / 12.92, ((v + 0.055) / 1.055) ** 2.4)
+    linear_r = decode(tonemap.to_srgb8(r) / 255.0)
+    m = report(tmp_path)["tests"][0]["metrics"]
+    assert m["psnr_peak"] == 1.0
+    assert compare.load(str(tmp_path / "r.png")) == pytest.approx(linear_r, abs=1e-6)
+    assert report(tmp_path)["flip_mode"] == "ldr"
+
+
+def test_mask_nonfinite_leaves_pixels_out(tmp_path):
+    rng = np.random.default_rng(10)
+    r = rng.uniform(0.1, 1, size=(6, 6, 3))
+    t = r * 1.1
+    t[0, 0, 1] = np.nan
+    t[2, 3] = np.inf
+    ref, test = write_pair(tmp_path, r, t)
+    assert run(ref, test, "-o", str(tmp_path / "refused")).returncode == 1
+    out = run(ref, test, "-o", str(tmp_path / "rep"), "--mask-nonfinite")
+    assert out.returncode == 0, out.stderr
+    m = report(tmp_path)["tests"][0]["metrics"]
+    keep = np.isfinite(t).all(axis=-1)
+    assert m["masked_pixels"] == 2
+    assert m["mae"] == pytest.approx(np.mean(np.abs(t[keep] - r[keep])), rel=1e-5)
+    assert np.isfinite(m["flip"]) and m["flip"] > 0
+
+
+def test_without_thresholds_the_verdict_is_no_thresholds(tmp_path):
+    r = np.full((4, 4, 3), 0.5)
+    ref, test = write_pair(tmp_path, r, r * 2)
+    out = run(ref, test, "-o", str(tmp_path / "rep"))
+    assert out.returncode == 0
+    assert "-> no thresholds" in out.stdout and "PASS" not in out.stdout
+    t = report(tmp_path)["tests"][0]
+    assert t["verdict"] == "no thresholds" and t["passed"] is None
+    html = (tmp_path / "rep" / "index.html").read_text()
+    assert "no thresholds" in html and ">PASS<" not in html
+
+
+def test_maps_exr_holds_every_map_as_a_layer(tmp_path):
+    rng = np.random.default_rng(11)
+    r = rng.uniform(0.1, 1, size=(5, 7, 3))
+    t = r + 0.25
+    ref, test = write_pair(tmp_path, r, t)
+    assert run(ref, test, "-o", str(tmp_path / "rep")).returncode == 0
+    import OpenEXR
+    with OpenEXR.File(str(tmp_path / "rep" / "maps.exr")) as f:
+        layers = {name: np.asarray(c.pixels) for name, c in f.channels().items()}
+    assert set(layers) == {"reference", "test0.image", "test0.difference", "test0.relative",
+                           "test0.flip.Y"}
+    np.testing.assert_allclose(layers["test0.difference"], 0.25, atol=1e-5)
+    np.testing.assert_allclose(layers["reference"], r, rtol=1e-6)
+    assert layers["test0.flip.Y"].shape == (5, 7)
+
+
+def test_difference_pictures_use_a_robust_scale():
+    values = np.concatenate([np.linspace(-0.01, 0.01, 999), [50.0]])   # one outlier
+    span = compare.robust_span(values)
+    assert 0.009 < span < 0.011                  # the 99th percentile, not the outlier
+    assert compare.robust_span(np.zeros(4)) == 1.0
+
+
+@pytest.mark.parametrize("test_value", [0.0, 1.0])
+def test_hdr_flip_of_a_black_reference_does_not_abort(test_value):
+    """flip-evaluator takes HDR exposures from the reference and aborts the
+    process on a black one (measured): compare must answer instead."""
+    r = np.zeros((6, 6, 3))
+    t = r.copy()
+    t[2, 2] = test_value
+    value, error_map = compare.flip(r, t, "hdr")
+    assert error_map.shape == (6, 6)
+    assert (value == 0) == (test_value == 0) and np.isfinite(value)

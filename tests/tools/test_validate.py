@@ -1,4 +1,5 @@
-"""mi-brdfs validate --quick: the report's findings, its files, and a real browser."""
+"""mi-brdfs validate --quick: the report's findings, its summary and exit status,
+its files, legible plots, and a real browser."""
 import json
 import os
 import shutil
@@ -7,6 +8,7 @@ import sys
 
 import pytest
 
+from mi_brdfs.tools import cli, validate
 
 
 @pytest.fixture(scope="module")
@@ -14,7 +16,7 @@ def report(tmp_path_factory):
     out = tmp_path_factory.mktemp("validate") / "report"
     run = subprocess.run([sys.executable, "-m", "mi_brdfs", "validate", "--quick", "-o", str(out)],
                          capture_output=True, text=True)
-    assert run.returncode == 0, run.stderr
+    assert run.returncode == 0, run.stderr + run.stdout
     return out, json.loads((out / "results.json").read_text())
 
 
@@ -83,3 +85,89 @@ def test_report_opens_in_headless_chromium(report, tmp_path):
                          capture_output=True, text=True, timeout=120)
     assert run.returncode == 0, run.stderr
     assert shot.exists() and shot.stat().st_size > 20_000
+    # The summary is at the top, where the screenshot starts; every picture fits
+    # a 1200-pixel page (the plots are shown at their own size).
+    from PIL import Image
+    html = (out / "index.html").read_text()
+    assert html.index("<h2>Summary</h2>") < html.index("<img")
+    widths = [Image.open(p).size[0] for p in out.glob("*.png")]
+    assert widths and max(widths) <= 1100
+
+
+def test_summary_counts_every_check(report):
+    out, r = report
+    checks = r["checks"]
+    n_rows = len(r["equivalence"]) + 2 * len(r["furnace"]) + len(r["sampling"])
+    assert len(checks) == n_rows and len({c["id"] for c in checks}) == n_rows
+    assert r["summary"] == {s: sum(c["status"] == s for c in checks) for s in ("fail", "known", "pass")}
+    assert r["summary"]["fail"] == 0
+    known = {c["id"]: c for c in checks if c["status"] == "known"}
+    assert "equivalence/cook_torrance-roughplastic" in known          # Schlick
+    assert known["furnace/lambert/m_D = 1/scanline/energy"]["reason"].startswith("the scan-line")
+    assert all(c["reason"] for c in known.values())
+    html = (out / "index.html").read_text()
+    assert html.index("<h2>Summary</h2>") < html.index("1. Built-in equivalence")
+    assert "documented known limitations" in html
+
+
+def fake_sections(monkeypatch, chi2_passed: bool, furnace_max: float = 1.0):
+    """Replace the expensive sections by one furnace row and one chi-square row."""
+    row = {"model": "phong", "config": "test row", "mode": "hdr", "angles": [0],
+           "quadrature": [furnace_max], "render": [furnace_max], "max": furnace_max, "max_at": 0,
+           "mean": furnace_max, "min": furnace_max, "render_vs_quadrature": 0.0,
+           "exceeds_1": furnace_max > 1.005, "loses_energy": False, "plot": "none.png"}
+    monkeypatch.setattr(validate, "equivalence_section", lambda size, out: [])
+    monkeypatch.setattr(validate, "furnace_section", lambda size, out, models: [row])
+    monkeypatch.setattr(validate, "lobe_section", lambda out, models: [])
+    monkeypatch.setattr(validate, "sampling_section", lambda size, models: [
+        {"model": "phong", "config": "injected", "theta": 30, "passed": chi2_passed,
+         "p_value": 1e-9 if not chi2_passed else 0.5, "weight_mean": 1.0,
+         "weight_variance": 0.0}])
+
+
+def test_validate_exits_1_when_a_check_fails(tmp_path, monkeypatch, capsys):
+    fake_sections(monkeypatch, chi2_passed=False)
+    code = cli.main(["validate", "--quick", "-q", "-o", str(tmp_path / "rep")])
+    assert code == 1
+    out = capsys.readouterr().out
+    assert "FAIL sampling/phong/injected/30: p = 1e-09" in out and "1 fail" in out
+    r = json.loads((tmp_path / "rep" / "results.json").read_text())
+    assert r["summary"] == {"fail": 1, "known": 0, "pass": 2}
+    assert "1 check(s) FAIL" in (tmp_path / "rep" / "index.html").read_text()
+
+
+def test_a_documented_limitation_does_not_fail_validate(tmp_path, monkeypatch):
+    fake_sections(monkeypatch, chi2_passed=True, furnace_max=1.2)
+    monkeypatch.setitem(validate.KNOWN_LIMITATIONS, "furnace/phong/test row/hdr/energy",
+                        validate.Known("injected for the test", up_to=1.25))
+    assert cli.main(["validate", "--quick", "-q", "-o", str(tmp_path / "a")]) == 0
+    r = json.loads((tmp_path / "a" / "results.json").read_text())
+    energy = next(c for c in r["checks"] if c["id"].endswith("/energy"))
+    assert energy["status"] == "known" and energy["reason"] == "injected for the test"
+    # Beyond the documented bound the same failure is a failure again.
+    fake_sections(monkeypatch, chi2_passed=True, furnace_max=1.3)
+    assert cli.main(["validate", "--quick", "-q", "-o", str(tmp_path / "b")]) == 1
+
+
+def test_polar_lobe_tick_labels_do_not_collide():
+    """The radial tick labels of the half-disc lobe plots used to run into each
+    other ("0.00.050.10..."): drawn, their boxes must not overlap."""
+    import mitsuba as mi
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    from mi_brdfs.tools import analysis
+
+    for bsdf in ({"type": "phong", "exponent": 50.0}, {"type": "lambert"}):
+        fig = Figure(figsize=(8.4, 3.0), dpi=100)
+        ax = fig.subplots(1, 2, subplot_kw={"projection": "polar"})[0]
+        analysis.polar_lobes(ax, mi.load_dict(bsdf), title="t")
+        renderer = FigureCanvasAgg(fig).get_renderer()
+        fig.draw(renderer)
+        for axis in (ax.yaxis, ax.xaxis):
+            boxes = [t.get_window_extent(renderer) for t in axis.get_ticklabels()
+                     if t.get_visible() and t.get_text()]
+            assert len(boxes) >= 2
+            for i, a in enumerate(boxes):
+                for b in boxes[i + 1:]:
+                    assert not a.overlaps(b), [t.get_text() for t in axis.get_ticklabels()]

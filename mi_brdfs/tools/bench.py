@@ -31,7 +31,9 @@ materials    N spheres, each with its own material (N up to 200; path depth 3,
              constant environment), plugin vs built-in (cook_torrance vs
              roughconductor, lambert vs diffuse): first and warm render split
              into tracing, code generation and kernel execution, and peak
-             memory; each (kind, N) in a process of its own.
+             memory; each (kind, N) in processes of its own (``rounds`` of
+             them, alternating kinds; medians). The first render loads its
+             kernels from Dr.Jit's disk cache when an earlier run compiled them.
 frozen       render_passes at the largest N in 1, 8 and 32 passes (the same
              spp in all), traced and frozen, each in a process of its own.
 kernels      eval, pdf, eval_pdf and sample of 2^22 direction pairs: kernel
@@ -76,18 +78,19 @@ class Settings:
     materials_res: int
     materials_spp: int
     frozen_passes: tuple[int, ...]
+    rounds: int                       # processes per (kind, N) in materials
     kernel_lanes: int                 # direction pairs per BSDF kernel (kernels)
 
 
 QUICK = Settings(res=24, spp=4, repeats=3, ref_spp=64, spp_ladder=(1, 2, 4, 8),
                  resolutions=(16, 32), light_counts=(1, 2, 4), table_resolutions=(8, 32),
                  materials=(1, 3), materials_res=16, materials_spp=4, frozen_passes=(1, 2, 4),
-                 kernel_lanes=2**14)
+                 rounds=1, kernel_lanes=2**14)
 FULL = Settings(res=192, spp=16, repeats=7, ref_spp=4096, spp_ladder=(1, 2, 4, 8, 16, 32, 64, 128),
                 resolutions=(64, 128, 256, 512), light_counts=(1, 2, 4, 8, 16, 32),
                 table_resolutions=(4, 8, 16, 32, 64, 128, 256),
                 materials=(1, 10, 50, 200), materials_res=128, materials_spp=64,
-                frozen_passes=(1, 8, 32), kernel_lanes=2**22)
+                frozen_passes=(1, 8, 32), rounds=3, kernel_lanes=2**22)
 
 
 def efficiency(relmse: float, seconds: float) -> float:
@@ -467,22 +470,20 @@ def peak_mib() -> float:
 
 
 def worker_materials(kind: str, n: int, res: int, spp: int, repeats: int) -> dict:
-    """First and warm render of the spheres scene, each split into tracing,
-    code generation and kernel execution."""
+    """First render of the spheres scene and the medians of ``repeats`` warm
+    renders, each split into tracing, code generation and kernel execution (s)."""
     import mitsuba as mi
     start = time.perf_counter()
     # parallel=False as in the CLI: Python plugins loaded in worker threads failed
     # intermittently (bad_alloc).
     scene = mi.load_dict(spheres_scene(kind, n, res), parallel=False)
-    load = time.perf_counter() - start
+    result = {"load_s": time.perf_counter() - start}
     first = measured(lambda: _render(scene, spp, seed=0))
-    times = []
-    for r in range(repeats):
-        start = time.perf_counter()
-        _render(scene, spp, seed=r + 1)
-        times.append(time.perf_counter() - start)
-    warm = measured(lambda: _render(scene, spp, seed=repeats + 1))
-    return {"load_s": load, "first": first, "warm_s": statistics.median(times), "warm": warm}
+    warm = [measured(lambda: _render(scene, spp, seed=r + 1)) for r in range(repeats)]
+    for part in ("wall", "tracing", "codegen", "execution"):
+        result[f"first_{part}_s"] = first[f"{part}_s"]
+        result[f"{part}_s"] = statistics.median(m[f"{part}_s"] for m in warm)
+    return result
 
 
 def worker_passes(n: int, res: int, spp: int, passes: int, freeze: bool, repeats: int) -> dict:
@@ -503,25 +504,28 @@ def worker_passes(n: int, res: int, spp: int, passes: int, freeze: bool, repeats
             "note": "; ".join(messages)}
 
 
+MATERIALS_COLUMNS = {     # column: the worker's figure
+    "first_s": "first_wall_s", "first_tracing_s": "first_tracing_s",
+    "first_codegen_s": "first_codegen_s", "warm_s": "wall_s", "tracing_s": "tracing_s",
+    "codegen_s": "codegen_s", "execution_s": "execution_s", "peak_mib": "peak_mib"}
+
+
 def group_materials(s: Settings, refs) -> list[dict]:
     rows = []
     for plugin, builtin in MATERIAL_PAIRS:
         for n in s.materials:
-            # Alternating kinds, each (kind, n) in a process of its own.
-            m = {kind: in_subprocess("materials", kind=kind, n=n, res=s.materials_res,
-                                     spp=s.materials_spp, repeats=s.repeats)
-                 for kind in (plugin, builtin)}
+            # Each (kind, n) in processes of its own, the kinds alternating; the
+            # median over the rounds of each process's figures.
+            runs: dict[str, list[dict]] = {plugin: [], builtin: []}
+            for _ in range(s.rounds):
+                for kind in (plugin, builtin):
+                    runs[kind].append(in_subprocess("materials", kind=kind, n=n,
+                                                    res=s.materials_res, spp=s.materials_spp,
+                                                    repeats=s.repeats))
             row = {"name": f"{plugin} vs {builtin}", "materials": n}
             for side, kind in (("plugin", plugin), ("builtin", builtin)):
-                r = m[kind]
-                row.update({f"{side}_first_s": r["first"]["wall_s"],
-                            f"{side}_first_tracing_s": r["first"]["tracing_s"],
-                            f"{side}_first_codegen_s": r["first"]["codegen_s"],
-                            f"{side}_warm_s": r["warm_s"],
-                            f"{side}_tracing_s": r["warm"]["tracing_s"],
-                            f"{side}_codegen_s": r["warm"]["codegen_s"],
-                            f"{side}_execution_s": r["warm"]["execution_s"],
-                            f"{side}_peak_mib": r["peak_mib"]})
+                for column, key in MATERIALS_COLUMNS.items():
+                    row[f"{side}_{column}"] = statistics.median(r[key] for r in runs[kind])
             row["first_ratio"] = row["plugin_first_s"] / row["builtin_first_s"]
             row["warm_ratio"] = row["plugin_warm_s"] / row["builtin_warm_s"]
             row["execution_ratio"] = row["plugin_execution_s"] / row["builtin_execution_s"]

@@ -29,7 +29,13 @@ What a replay cannot see, and how it is handled here:
   fresh scene records twice. :func:`warm_up` does that initialisation
   without tracing any BSDF.
 
-Scalar variants have no JIT and nothing to freeze: :func:`unavailable` says why.
+What cannot be frozen: a BSDF alive in the process but outside the scene's
+shapes (e.g. one loaded on its own with ``mi.load_dict`` to plot its lobe).
+Mitsuba's virtual calls cover every live BSDF instance, and Dr.Jit can only
+collect the members of those it finds among the frozen function's inputs: the
+recording fails (:func:`why` says so) and the callers fall back to plain
+rendering. Scalar variants have no JIT and nothing to freeze:
+:func:`unavailable` says why.
 """
 from __future__ import annotations
 
@@ -45,6 +51,13 @@ def unavailable() -> str | None:
     if not dr.flag(dr.JitFlag.KernelFreezing):
         return "Dr.Jit's KernelFreezing flag is off"
     return None
+
+
+def why(error: Exception) -> str:
+    """A frozen call's error in one line: Dr.Jit raises a generic error whose
+    cause says what went wrong."""
+    cause = error.__cause__ or error
+    return f"{type(cause).__name__}: " + " ".join(str(cause).replace("record(): ", "").split())
 
 
 def bsdf_flags(scene, *args, **kwargs) -> tuple[int, ...]:
@@ -119,6 +132,10 @@ class GradientStep:
     recording when the BSDFs' lobes change). ``freeze=False``, or a variant
     without JIT, runs the same code unfrozen; ``frozen`` says which.
 
+    If the recording fails (e.g. a BSDF alive outside the scene), the call
+    raises instead of falling back: the failed call has already propagated
+    its gradients.
+
     It records twice, whatever the number of steps: the first backward pass
     initialises state that the second call sees as a changed input (measured;
     a :func:`warm_up`, even an unfrozen render with a backward pass, does not
@@ -140,7 +157,16 @@ class GradientStep:
         return loss
 
     def __call__(self, scene, reference, seed: int):
-        return self.function(scene, reference, opaque_seed(seed) if self.frozen else seed)
+        if not self.frozen:
+            return self.function(scene, reference, seed)
+        try:
+            return self.function(scene, reference, opaque_seed(seed))
+        except Exception as error:
+            # Not retried unfrozen: the failed recording has run the backward
+            # pass already, and a second one would add its gradients twice.
+            raise RuntimeError(f"frozen gradient step failed ({why(error)}); this step's "
+                               "gradients may have been accumulated once; use "
+                               "GradientStep(..., freeze=False)") from error
 
     @property
     def recordings(self) -> int:

@@ -7,8 +7,9 @@ the first pass traces the scene's Python code (every BSDF plugin), the next
 ones replay the recorded kernels with a new seed. Passes of another spp (spp
 not divisible by the number of passes) record once more. Where freezing is not
 possible — a variant without JIT, a scene that changed between passes so that
-a pass had to be traced again, an error inside the frozen function — the
-remaining passes are rendered plainly and ``log`` says why. Either way the
+a pass had to be traced again, an error inside the frozen function (e.g. a
+BSDF alive outside the scene, see :mod:`.frozen`) — the remaining passes are
+rendered plainly and ``log`` says why. Either way the
 image is the same: the seeds are the same and a replay computes what a trace
 would (equal to float precision).
 """
@@ -58,7 +59,7 @@ def render_passes(scene, spp: int, passes: int = 8, seed: int = 0, show=None,
             try:
                 image = render(scene, n, pass_seed)
             except Exception as error:           # noqa: BLE001  (reported, then rendered plainly)
-                say(f"pass {i + 1}: frozen render failed ({type(error).__name__}: {error}); "
+                say(f"pass {i + 1}: frozen render failed ({frozen.why(error)}); "
                     "rendering the remaining passes unfrozen")
                 render = None
             else:

@@ -37,7 +37,8 @@ materials    N spheres, each with its own material (N up to 200; path depth 3,
 frozen       render_passes at the largest N in 1, 8 and 32 passes (the same
              spp in all), traced and frozen, each in a process of its own.
 kernels      eval, pdf, eval_pdf and sample of 2^22 direction pairs: kernel
-             execution time, plugin and built-in alternating in one process.
+             execution time, plugin and built-in alternating in one process,
+             on one thread (stable on shared cores).
 tracing      tracing time of one call of each method, plugin vs built-in, and
              what the plugin's call does: texture evaluations, Mitsuba objects
              built, BSDF methods it calls again, helpers called more than once,
@@ -602,9 +603,15 @@ def bsdf_call(bsdf, method: str, x: dict):
 
 def worker_kernels(lanes: int, repeats: int) -> dict:
     """Kernel execution time of each BSDF call, plugin and built-in alternating,
-    medians over ``repeats`` rounds after a compiling one."""
+    medians over ``repeats`` rounds after a compiling one.
+
+    On one thread: with Dr.Jit's thread pool on cores shared with other
+    processes, a kernel of a few ms took 1.9 or 5.8 ms depending on whether a
+    worker thread was descheduled (whichever kind ran first in a round, per
+    process); single-threaded, both took 1.8-1.9 ms in every round."""
     import drjit as dr
     import mitsuba as mi
+    dr.set_thread_count(1)
     x = bsdf_inputs(lanes)
     pairs = [(name, mi.load_dict(p), mi.load_dict(b)) for name, p, b in BSDF_PAIRS]
     samples: dict[tuple, list[dict]] = {}

@@ -924,7 +924,9 @@ def write_outputs(out_dir: str, results: dict) -> None:
     write_atomically(os.path.join(out_dir, "results.csv"), write_csv)
 
     lines = ["# mi-brdfs bench results", "",
-             f"{results['settings_name']} run, {results['seconds']:.0f} s. Machine: "
+             f"{results['settings_name']} run, {results['seconds']:.0f} s ("
+             + ", ".join(f"{g} {t:.0f} s" for g, t in results.get("group_seconds", {}).items())
+             + "). Machine: "
              + ", ".join(f"{k} {v}" for k, v in results["machine"].items()) + ".", "",
              "Timings are medians of repeated renders after a warm-up (compile) render, "
              "in one process (materials, frozen, kernels, tracing: in processes of their own, "
@@ -1059,10 +1061,12 @@ def run(out_dir: str, quick: bool = False, only: list[str] | None = None,
     refs = References(cache, settings.ref_spp)
     start = time.perf_counter()
     results = {"settings_name": "quick" if quick else "full", "settings": settings.__dict__,
-               "machine": machine(), "groups": {}}
+               "machine": machine(), "groups": {}, "group_seconds": {}}
     for g in groups:
         log(f"bench: {g} ...")
+        group_start = time.perf_counter()
         results["groups"][g] = RUNNERS[g](settings, refs)
+        results["group_seconds"][g] = time.perf_counter() - group_start
     results["seconds"] = time.perf_counter() - start
     os.makedirs(out_dir, exist_ok=True)
     results["plots"] = plots(out_dir, results)

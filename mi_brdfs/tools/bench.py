@@ -197,7 +197,8 @@ def measured(run) -> dict:
     execution = sum(k.get("execution_time", 0.0) for k in history) / 1000
     codegen = sum(k.get("codegen_time", 0.0) + k.get("backend_time", 0.0) for k in history) / 1000
     return {"wall_s": wall, "kernels": len(history), "execution_s": execution,
-            "codegen_s": codegen, "tracing_s": max(wall - execution - codegen, 0.0)}
+            "codegen_s": codegen, "tracing_s": max(wall - execution - codegen, 0.0),
+            "operations": sum(k.get("operation_count", 0) for k in history)}
 
 
 class References:
@@ -630,6 +631,7 @@ def worker_kernels(lanes: int, repeats: int) -> dict:
                 ms = samples[(name, method, side)]
                 row[f"{side}_ms"] = 1e3 * statistics.median(m["execution_s"] for m in ms)
                 row[f"{side}_wall_ms"] = 1e3 * statistics.median(m["wall_s"] for m in ms)
+                row[f"{side}_ops"] = ms[0]["operations"]        # in the kernel, after CSE
             row["ratio"] = row["plugin_ms"] / row["builtin_ms"]
             row["wall_ratio"] = row["plugin_wall_ms"] / row["builtin_wall_ms"]
             rows.append(row)

@@ -142,6 +142,7 @@ def test_kernels_and_tracing_every_pair_and_method(results):
         assert {(row["name"], row["method"]) for row in rows} == {
             (n, m) for n in names for m in bench.BSDF_METHODS}
         assert all(row["ratio"] > 0 for row in rows)
+    assert all(row["plugin_ops"] > 0 and row["builtin_ops"] > 0 for row in r["groups"]["kernels"])
     tracing = {(row["name"], row["method"]): row for row in r["groups"]["tracing"]}
     sample = tracing[(bench.BSDF_PAIRS[0][0], "sample")]
     # The path tracer calls sample and eval_pdf; the plugin's sample calls eval_pdf again.

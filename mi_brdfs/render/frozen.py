@@ -34,8 +34,9 @@ shapes (e.g. one loaded on its own with ``mi.load_dict`` to plot its lobe).
 Mitsuba's virtual calls cover every live BSDF instance, and Dr.Jit can only
 collect the members of those it finds among the frozen function's inputs: the
 recording fails (:func:`why` says so) and the callers fall back to plain
-rendering. Scalar variants have no JIT and nothing to freeze:
-:func:`unavailable` says why.
+rendering. Spectral variants fail to record too, built-in BSDFs alike
+(Mitsuba 3.9.1: a spectral table is used without being an input). Scalar
+variants have no JIT and nothing to freeze: :func:`unavailable` says why.
 """
 from __future__ import annotations
 

@@ -48,8 +48,11 @@ def render_passes(scene, spp: int, passes: int = 8, seed: int = 0, show=None,
         if reason:
             say(f"passes not frozen: {reason}")
         else:
-            render = frozen.FrozenRender()
-            frozen.warm_up(scene)
+            try:
+                frozen.warm_up(scene)
+                render = frozen.FrozenRender()
+            except Exception as error:           # noqa: BLE001  (reported, then rendered plainly)
+                say(f"passes not frozen: the warm-up render failed ({frozen.why(error)})")
 
     total, done, start = None, 0, time.perf_counter()
     for i, n in enumerate(chunks):

@@ -9,9 +9,9 @@ not divisible by the number of passes) record once more. Where freezing is not
 possible — a variant without JIT, a scene that changed between passes so that
 a pass had to be traced again, an error inside the frozen function (e.g. a
 BSDF alive outside the scene, see :mod:`.frozen`) — the remaining passes are
-rendered plainly and ``log`` says why. Either way the
-image is the same: the seeds are the same and a replay computes what a trace
-would (equal to float precision).
+rendered plainly and ``log`` says why. Either way the image is the same: the
+seeds are the same and a replay computes what a trace would (equal to float
+precision).
 """
 from __future__ import annotations
 

@@ -2,7 +2,10 @@
 
 Every timing is the median of ``repeats`` renders after a warm-up render that
 compiles the kernels (the warm-up's extra time is reported as compile time),
-all in one process so that ratios are meaningful on a noisy machine. Every
+all in one process so that ratios are meaningful on a noisy machine — except
+where the number of BSDF instances alive matters (Dr.Jit traces every live
+instance at every render): ``materials``, ``frozen``, ``kernels`` and
+``tracing`` run in fresh processes (``python -m mi_brdfs.tools.bench --worker``). Every
 error is the relative MSE (pbrt's form, mean((t - r)²/(r + 0.01)²)) against a
 converged reference rendered once at high spp and cached on disk, keyed by the
 scene and the settings. Efficiency is 1 / (relMSE × seconds).
@@ -24,6 +27,22 @@ convergence  error vs spp (log-log) and its slope (about -1 for relMSE).
 scaling      render time vs resolution and vs number of lights (scan-line).
 lobes        model only what the scene requires: a plugin with a lobe switched
              off renders at the cost of the model without that lobe.
+materials    N spheres, each with its own material (N up to 200; path depth 3,
+             constant environment), plugin vs built-in (cook_torrance vs
+             roughconductor, lambert vs diffuse): first and warm render split
+             into tracing, code generation and kernel execution, and peak
+             memory; each (kind, N) in processes of its own (``rounds`` of
+             them, alternating kinds; medians). The first render loads its
+             kernels from Dr.Jit's disk cache when an earlier run compiled them.
+frozen       render_passes at the largest N in 1, 8 and 32 passes (the same
+             spp in all), traced and frozen, each in a process of its own.
+kernels      eval, pdf, eval_pdf and sample of 2^22 direction pairs: kernel
+             execution time, plugin and built-in alternating in one process,
+             on one thread (stable on shared cores).
+tracing      tracing time of one call of each method, plugin vs built-in, and
+             what the plugin's call does: texture evaluations, Mitsuba objects
+             built, BSDF methods it calls again, helpers called more than once,
+             and how often a path-traced render calls each method.
 
 Outputs in OUT_DIR: results.json, results.csv, README.md (tables) and plots.
 """
@@ -42,7 +61,7 @@ from dataclasses import dataclass
 import numpy as np
 
 GROUPS = ("builtin", "models", "oren_nayar", "sampling", "integrators", "convergence", "scaling",
-          "lobes")
+          "lobes", "materials", "frozen", "kernels", "tracing")
 
 
 @dataclass
@@ -55,13 +74,24 @@ class Settings:
     resolutions: tuple[int, ...]
     light_counts: tuple[int, ...]
     table_resolutions: tuple[int, ...]
+    # The many-materials scene (materials, frozen): sphere counts, pixels, spp.
+    materials: tuple[int, ...]
+    materials_res: int
+    materials_spp: int
+    frozen_passes: tuple[int, ...]
+    rounds: int                       # processes per (kind, N) in materials
+    kernel_lanes: int                 # direction pairs per BSDF kernel (kernels)
 
 
 QUICK = Settings(res=24, spp=4, repeats=3, ref_spp=64, spp_ladder=(1, 2, 4, 8),
-                 resolutions=(16, 32), light_counts=(1, 2, 4), table_resolutions=(8, 32))
+                 resolutions=(16, 32), light_counts=(1, 2, 4), table_resolutions=(8, 32),
+                 materials=(1, 3), materials_res=16, materials_spp=4, frozen_passes=(1, 2, 4),
+                 rounds=1, kernel_lanes=2**14)
 FULL = Settings(res=192, spp=16, repeats=7, ref_spp=4096, spp_ladder=(1, 2, 4, 8, 16, 32, 64, 128),
                 resolutions=(64, 128, 256, 512), light_counts=(1, 2, 4, 8, 16, 32),
-                table_resolutions=(4, 8, 16, 32, 64, 128, 256))
+                table_resolutions=(4, 8, 16, 32, 64, 128, 256),
+                materials=(1, 10, 50, 200), materials_res=128, materials_spp=64,
+                frozen_passes=(1, 8, 32), rounds=3, kernel_lanes=2**22)
 
 
 def efficiency(relmse: float, seconds: float) -> float:
@@ -145,19 +175,30 @@ def timed(scene, spp: int, repeats: int) -> dict:
         _render(scene, spp, seed=r + 1)
         times.append(time.perf_counter() - start)
     median = statistics.median(times)
-    # Where the time goes, on one more (warm) render.
+    split = measured(lambda: _render(scene, spp, seed=repeats + 1))    # where the time goes
+    return {"median_s": median, "compile_s": max(first - median, 0.0), "times_s": times,
+            "kernels": split["kernels"], "execution_s": split["execution_s"],
+            "codegen_s": split["codegen_s"], "tracing_s": split["tracing_s"]}
+
+
+def measured(run) -> dict:
+    """Wall time of ``run()`` (which must evaluate its result) and its split from
+    Dr.Jit's kernel history (s): code generation (codegen and LLVM), kernel
+    execution, and tracing (the rest: Python and Dr.Jit building the kernels)."""
+    import drjit as dr
     dr.set_flag(dr.JitFlag.KernelHistory, True)
     dr.kernel_history()                              # clear
     start = time.perf_counter()
-    _render(scene, spp, seed=repeats + 1)
+    run()
+    dr.sync_thread()
     wall = time.perf_counter() - start
     history = dr.kernel_history()
     dr.set_flag(dr.JitFlag.KernelHistory, False)
     execution = sum(k.get("execution_time", 0.0) for k in history) / 1000
     codegen = sum(k.get("codegen_time", 0.0) + k.get("backend_time", 0.0) for k in history) / 1000
-    return {"median_s": median, "compile_s": max(first - median, 0.0), "times_s": times,
-            "kernels": len(history), "execution_s": execution, "codegen_s": codegen,
-            "tracing_s": max(wall - execution - codegen, 0.0)}
+    return {"wall_s": wall, "kernels": len(history), "execution_s": execution,
+            "codegen_s": codegen, "tracing_s": max(wall - execution - codegen, 0.0),
+            "operations": sum(k.get("operation_count", 0) for k in history)}
 
 
 class References:
@@ -363,9 +404,375 @@ def group_lobes(s: Settings, refs) -> list[dict]:
     return rows
 
 
+# ----------------------------------------------------------------------------
+#  Many materials, frozen passes, BSDF kernels, tracing: in processes of their own
+# ----------------------------------------------------------------------------
+#
+# At every render Dr.Jit traces every BSDF instance alive in the process, so a
+# measurement that depends on the number of instances (and on nothing else)
+# runs in a fresh Python process: ``python -m mi_brdfs.tools.bench --worker
+# TASK OPTIONS_JSON`` prints one result line, with the process's peak memory.
+
+WORKER_MARK = "mi-brdfs-bench-result "
+
+MATERIALS = {     # one material per sphere; t in [0, 1] is the sphere's place in the grid
+    "cook_torrance": lambda t: {"type": "cook_torrance", "distribution": "ggx",
+                                "geometry": "smith", "f0": 1.0, "k": 0.0,
+                                "alpha": 0.05 + 0.5 * t},
+    "roughconductor": lambda t: {"type": "roughconductor", "distribution": "ggx",
+                                 "alpha": 0.05 + 0.5 * t},
+    "lambert": lambda t: {"type": "lambert",
+                          "reflectance": {"type": "rgb", "value": [0.2 + 0.6 * t, 0.5, 0.8 - 0.6 * t]}},
+    "diffuse": lambda t: {"type": "diffuse",
+                          "reflectance": {"type": "rgb", "value": [0.2 + 0.6 * t, 0.5, 0.8 - 0.6 * t]}},
+}
+MATERIAL_PAIRS = [("cook_torrance", "roughconductor"), ("lambert", "diffuse")]
+
+
+def spheres_scene(kind: str, n: int, res: int, max_depth: int = 3) -> dict:
+    """``n`` unit spheres in a square grid, each with its own ``kind`` material,
+    in a constant environment, path traced (the issue's scene: 200 spheres,
+    depth 3, 128², 64 spp)."""
+    import mitsuba as mi
+    T = mi.ScalarTransform4f
+    side = math.ceil(math.sqrt(n))
+    spacing, fov = 2.5, 40.0
+    distance = 1.2 * side * spacing / (2 * math.tan(math.radians(fov / 2))) + 2
+    d = {"type": "scene", "integrator": {"type": "path", "max_depth": max_depth},
+         "sensor": {"type": "perspective", "fov": fov,
+                    "to_world": T().look_at(origin=[0, 0, distance], target=[0, 0, 0],
+                                            up=[0, 1, 0]),
+                    "film": {"type": "hdrfilm", "width": res, "height": res,
+                             "rfilter": {"type": "box"}},
+                    "sampler": {"type": "independent"}},
+         "env": {"type": "constant", "radiance": {"type": "rgb", "value": 1.0}}}
+    for i in range(n):
+        x, y = (i % side - (side - 1) / 2) * spacing, (i // side - (side - 1) / 2) * spacing
+        d[f"sphere{i}"] = {"type": "sphere", "center": [x, y, 0.0], "radius": 1.0,
+                           "bsdf": MATERIALS[kind](i / max(n - 1, 1))}
+    return d
+
+
+def in_subprocess(task: str, **options) -> dict:
+    """Run a worker task in a fresh Python process; its result (with peak_mib)."""
+    import subprocess
+    import sys
+    run = subprocess.run([sys.executable, "-m", "mi_brdfs.tools.bench", "--worker", task,
+                          json.dumps(options)], capture_output=True, text=True)
+    lines = [line for line in run.stdout.splitlines() if line.startswith(WORKER_MARK)]
+    if run.returncode != 0 or not lines:
+        raise RuntimeError(f"bench worker {task} {options} failed:\n{run.stderr[-3000:]}")
+    return json.loads(lines[-1][len(WORKER_MARK):])
+
+
+def peak_mib() -> float:
+    """This process's peak resident memory (ru_maxrss, KiB on Linux), in MiB."""
+    import resource
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+
+
+def worker_materials(kind: str, n: int, res: int, spp: int, repeats: int) -> dict:
+    """First render of the spheres scene and the medians of ``repeats`` warm
+    renders, each split into tracing, code generation and kernel execution (s)."""
+    import mitsuba as mi
+    start = time.perf_counter()
+    # parallel=False as in the CLI: Python plugins loaded in worker threads failed
+    # intermittently (bad_alloc).
+    scene = mi.load_dict(spheres_scene(kind, n, res), parallel=False)
+    result = {"load_s": time.perf_counter() - start}
+    first = measured(lambda: _render(scene, spp, seed=0))
+    warm = [measured(lambda: _render(scene, spp, seed=r + 1)) for r in range(repeats)]
+    for part in ("wall", "tracing", "codegen", "execution"):
+        result[f"first_{part}_s"] = first[f"{part}_s"]
+        result[f"{part}_s"] = statistics.median(m[f"{part}_s"] for m in warm)
+    return result
+
+
+def worker_passes(n: int, res: int, spp: int, passes: int, freeze: bool, repeats: int) -> dict:
+    """``render_passes`` of the cook_torrance spheres scene: the first call in
+    the process (what ``mi-brdfs render`` does) and the median of the next."""
+    import mitsuba as mi
+
+    from ..render.passes import render_passes
+    scene = mi.load_dict(spheres_scene("cook_torrance", n, res), parallel=False)
+    messages: list[str] = []
+    times = []
+    for r in range(repeats + 1):
+        messages.clear()
+        start = time.perf_counter()
+        render_passes(scene, spp, passes, seed=r, freeze=freeze, log=messages.append)
+        times.append(time.perf_counter() - start)
+    return {"first_s": times[0], "warm_s": statistics.median(times[1:]),
+            "note": "; ".join(messages)}
+
+
+MATERIALS_COLUMNS = {     # column: the worker's figure
+    "first_s": "first_wall_s", "first_tracing_s": "first_tracing_s",
+    "first_codegen_s": "first_codegen_s", "warm_s": "wall_s", "tracing_s": "tracing_s",
+    "codegen_s": "codegen_s", "execution_s": "execution_s", "peak_mib": "peak_mib"}
+
+
+def group_materials(s: Settings, refs) -> list[dict]:
+    rows = []
+    for plugin, builtin in MATERIAL_PAIRS:
+        for n in s.materials:
+            # Each (kind, n) in processes of its own, the kinds alternating; the
+            # median over the rounds of each process's figures.
+            runs: dict[str, list[dict]] = {plugin: [], builtin: []}
+            for _ in range(s.rounds):
+                for kind in (plugin, builtin):
+                    runs[kind].append(in_subprocess("materials", kind=kind, n=n,
+                                                    res=s.materials_res, spp=s.materials_spp,
+                                                    repeats=s.repeats))
+            row = {"name": f"{plugin} vs {builtin}", "materials": n}
+            for side, kind in (("plugin", plugin), ("builtin", builtin)):
+                for column, key in MATERIALS_COLUMNS.items():
+                    row[f"{side}_{column}"] = statistics.median(r[key] for r in runs[kind])
+            row["first_ratio"] = row["plugin_first_s"] / row["builtin_first_s"]
+            row["warm_ratio"] = row["plugin_warm_s"] / row["builtin_warm_s"]
+            row["execution_ratio"] = row["plugin_execution_s"] / row["builtin_execution_s"]
+            row["memory_ratio"] = row["plugin_peak_mib"] / row["builtin_peak_mib"]
+            rows.append(row)
+    return rows
+
+
+def group_frozen(s: Settings, refs) -> list[dict]:
+    n = s.materials[-1]
+    rows = []
+    for passes in s.frozen_passes:
+        for freeze in ((False,) if passes == 1 else (False, True)):
+            r = in_subprocess("passes", n=n, res=s.materials_res, spp=s.materials_spp,
+                              passes=passes, freeze=freeze, repeats=3)
+            rows.append({"materials": n, "spp": s.materials_spp, "passes": passes,
+                         "frozen": freeze, "first_s": r["first_s"], "warm_s": r["warm_s"],
+                         "peak_mib": r["peak_mib"], "note": r["note"]})
+    one = next(r for r in rows if r["passes"] == 1)
+    for r in rows:
+        r["first_vs_1_pass"] = r["first_s"] / one["first_s"]
+        r["warm_vs_1_pass"] = r["warm_s"] / one["warm_s"]
+    return rows
+
+
+# --- BSDF calls on direction pairs ---------------------------------------------
+
+BSDF_PAIRS = [     # (name, plugin, built-in): the same BSDF (up to float error, or the G1 fit)
+    ("cook_torrance ggx vs roughconductor ggx",
+     {"type": "cook_torrance", "distribution": "ggx", "geometry": "smith", "f0": 1.0, "k": 0.0,
+      "alpha": 0.3},
+     {"type": "roughconductor", "distribution": "ggx", "alpha": 0.3}),
+    ("cook_torrance beckmann vs roughconductor beckmann",
+     {"type": "cook_torrance", "distribution": "beckmann", "geometry": "smith", "f0": 1.0,
+      "k": 0.0, "alpha": 0.3},
+     {"type": "roughconductor", "distribution": "beckmann", "alpha": 0.3}),
+    ("lambert vs diffuse", {"type": "lambert", "reflectance": 0.6},
+     {"type": "diffuse", "reflectance": 0.6}),
+]
+TWO_LOBES = ("cook_torrance ggx k=0.5 vs roughplastic ggx",
+             {"type": "cook_torrance", "distribution": "ggx", "geometry": "smith", "k": 0.5,
+              "alpha": 0.3},
+             {"type": "roughplastic", "distribution": "ggx", "alpha": 0.3})
+BSDF_METHODS = ("eval", "pdf", "eval_pdf", "sample")
+
+
+def bsdf_inputs(lanes: int, seed: int = 1) -> dict:
+    """Random viewer and light directions above the surface and random samples,
+    evaluated (a kernel then holds the BSDF alone)."""
+    import drjit as dr
+    import mitsuba as mi
+    rng = np.random.default_rng(seed)
+
+    def hemisphere():
+        v = rng.normal(size=(3, lanes))
+        v /= np.linalg.norm(v, axis=0)
+        v[2] = np.abs(v[2])
+        return mi.Vector3f(*v.astype(np.float32))
+    si = dr.zeros(mi.SurfaceInteraction3f, lanes)
+    si.wi = hemisphere()
+    si.uv = mi.Point2f(*rng.random((2, lanes), dtype=np.float32))
+    x = {"ctx": mi.BSDFContext(), "si": si, "wo": hemisphere(),
+         "sample1": mi.Float(rng.random(lanes, dtype=np.float32)),
+         "sample2": mi.Point2f(*rng.random((2, lanes), dtype=np.float32))}
+    dr.eval(x["si"].wi, x["si"].uv, x["wo"], x["sample1"], x["sample2"])
+    return x
+
+
+def bsdf_call(bsdf, method: str, x: dict):
+    if method == "sample":
+        return bsdf.sample(x["ctx"], x["si"], x["sample1"], x["sample2"])
+    return getattr(bsdf, method)(x["ctx"], x["si"], x["wo"])
+
+
+def worker_kernels(lanes: int, repeats: int) -> dict:
+    """Kernel execution time of each BSDF call, plugin and built-in alternating,
+    medians over ``repeats`` rounds after a compiling one.
+
+    On one thread: with Dr.Jit's thread pool on cores shared with other
+    processes, a kernel of a few ms took 1.9 or 5.8 ms depending on whether a
+    worker thread was descheduled (whichever kind ran first in a round, per
+    process); single-threaded, both took 1.8-1.9 ms in every round."""
+    import drjit as dr
+    import mitsuba as mi
+    dr.set_thread_count(1)
+    x = bsdf_inputs(lanes)
+    pairs = [(name, mi.load_dict(p), mi.load_dict(b)) for name, p, b in BSDF_PAIRS]
+    samples: dict[tuple, list[dict]] = {}
+    for r in range(repeats + 1):                      # round 0 compiles
+        for name, plugin, builtin in pairs:
+            for method in BSDF_METHODS:
+                for side, bsdf in (("plugin", plugin), ("builtin", builtin)):
+                    m = measured(lambda: dr.eval(bsdf_call(bsdf, method, x)))
+                    if r:
+                        samples.setdefault((name, method, side), []).append(m)
+    rows = []
+    for name, _, _ in pairs:
+        for method in BSDF_METHODS:
+            row = {"name": name, "method": method, "lanes": lanes}
+            for side in ("plugin", "builtin"):
+                ms = samples[(name, method, side)]
+                row[f"{side}_ms"] = 1e3 * statistics.median(m["execution_s"] for m in ms)
+                row[f"{side}_wall_ms"] = 1e3 * statistics.median(m["wall_s"] for m in ms)
+                row[f"{side}_ops"] = ms[0]["operations"]        # in the kernel, after CSE
+            row["ratio"] = row["plugin_ms"] / row["builtin_ms"]
+            row["wall_ratio"] = row["plugin_wall_ms"] / row["builtin_wall_ms"]
+            rows.append(row)
+    return {"rows": rows}
+
+
+class _CountingTexture:
+    """Forwards to a texture and counts its evaluations (the tracing group)."""
+
+    def __init__(self, texture, counter: list[int]):
+        self._texture, self._counter = texture, counter
+
+    def __getattr__(self, name):
+        value = getattr(self._texture, name)
+        if not name.startswith("eval"):
+            return value
+
+        def counted(*args, **kwargs):
+            self._counter[0] += 1
+            return value(*args, **kwargs)
+        return counted
+
+
+def _profile(run):
+    import cProfile
+    import pstats
+    profile = cProfile.Profile()
+    profile.enable()
+    run()
+    profile.disable()
+    return pstats.Stats(profile).stats   # {(file, line, name): (cc, nc, tt, ct, callers)}
+
+
+def _is_bsdf_method(key) -> bool:
+    return key[0].replace(os.sep, "/").endswith("bsdfs/base.py") and key[2] in BSDF_METHODS
+
+
+def call_anatomy(bsdf, method: str, x: dict) -> dict:
+    """What one traced call of a plugin method does: Python function calls,
+    texture evaluations, MicrofacetDistribution objects built, the BSDF
+    methods it calls again, and the helpers called more than once."""
+    import mitsuba as mi
+    textures = {k: v for k, v in vars(bsdf).items() if isinstance(v, mi.Texture)}
+    evals, built = [0], [0]
+    original = mi.MicrofacetDistribution
+
+    def counting(*args, **kwargs):
+        built[0] += 1
+        return original(*args, **kwargs)
+    for k, v in textures.items():
+        setattr(bsdf, k, _CountingTexture(v, evals))
+    mi.MicrofacetDistribution = counting
+    try:
+        stats = _profile(lambda: bsdf_call(bsdf, method, x))
+    finally:
+        mi.MicrofacetDistribution = original
+        for k, v in textures.items():
+            setattr(bsdf, k, v)
+    ours = {k: v[1] for k, v in stats.items() if "mi_brdfs" in k[0] and k[0] != __file__}
+    inner = {k[2]: n - (k[2] == method) for k, n in ours.items() if _is_bsdf_method(k)}
+    return {"python_calls": sum(ours.values()), "texture_evals": evals[0],
+            "microfacet_objects": built[0],
+            "inner_calls": ", ".join(f"{m} x{n}" for m, n in sorted(inner.items()) if n),
+            "repeated": ", ".join(f"{k[2]} x{n}" for k, n in sorted(ours.items(), key=lambda kv: -kv[1])
+                                  if n > 1 and not _is_bsdf_method(k))}
+
+
+def calls_in_a_render(config: dict) -> dict[str, list[int]]:
+    """Per BSDF method: [calls by Mitsuba, all calls] of one plugin instance
+    while one path-traced render (depth 3) is traced."""
+    import mitsuba as mi
+    scene = mi.load_dict(scene_dict(config, 8, plane=False), parallel=False)
+    stats = _profile(lambda: _render(scene, 1, seed=0))
+    counts = {m: [0, 0] for m in BSDF_METHODS}
+    for key, (_, nc, _, _, callers) in stats.items():
+        if _is_bsdf_method(key):
+            counts[key[2]][0] += sum(c[1] for k, c in callers.items() if "mi_brdfs" not in k[0])
+            counts[key[2]][1] += nc
+    return counts
+
+
+def worker_tracing(lanes: int, calls: int) -> dict:
+    """Tracing time of each BSDF call (no evaluation), plugin vs built-in, and
+    the anatomy of the plugin's call."""
+    import gc
+
+    import mitsuba as mi
+    pairs = [*BSDF_PAIRS, TWO_LOBES]
+    # First, while no other BSDF is alive: a render traces every live instance.
+    in_render = {}
+    for name, p, _ in pairs:
+        in_render[name] = calls_in_a_render(p)
+        gc.collect()
+    x = bsdf_inputs(lanes)
+    rows = []
+    for name, p, b in pairs:
+        plugin, builtin = mi.load_dict(p), mi.load_dict(b)
+        for method in BSDF_METHODS:
+            row = {"name": name, "method": method}
+            for side, bsdf in (("plugin", plugin), ("builtin", builtin)):
+                bsdf_call(bsdf, method, x)
+                times = []
+                for _ in range(calls):
+                    start = time.perf_counter()
+                    out = bsdf_call(bsdf, method, x)
+                    times.append(time.perf_counter() - start)
+                    del out
+                row[f"{side}_ms"] = 1e3 * statistics.median(times)
+            row["ratio"] = row["plugin_ms"] / row["builtin_ms"]
+            row["render_calls"], row["render_calls_all"] = in_render[name][method]
+            row.update(call_anatomy(plugin, method, x))
+            rows.append(row)
+    return {"rows": rows}
+
+
+def group_kernels(s: Settings, refs) -> list[dict]:
+    return in_subprocess("kernels", lanes=s.kernel_lanes, repeats=s.repeats)["rows"]
+
+
+def group_tracing(s: Settings, refs) -> list[dict]:
+    return in_subprocess("tracing", lanes=1024, calls=25 * s.repeats)["rows"]
+
+
+WORKERS = {"materials": worker_materials, "passes": worker_passes, "kernels": worker_kernels,
+           "tracing": worker_tracing}
+
+
+def worker_main(task: str, options: str) -> int:
+    """``python -m mi_brdfs.tools.bench --worker TASK OPTIONS_JSON``: one result line."""
+    import mi_brdfs  # noqa: F401  (LLVM set-up, plugins registered)
+    result = WORKERS[task](**json.loads(options))
+    result["peak_mib"] = peak_mib()
+    print(WORKER_MARK + json.dumps(result), flush=True)
+    return 0
+
+
 RUNNERS = {"builtin": group_builtin, "models": group_models, "oren_nayar": group_oren_nayar,
            "sampling": group_sampling, "integrators": group_integrators,
-           "convergence": group_convergence, "scaling": group_scaling, "lobes": group_lobes}
+           "convergence": group_convergence, "scaling": group_scaling, "lobes": group_lobes,
+           "materials": group_materials, "frozen": group_frozen, "kernels": group_kernels,
+           "tracing": group_tracing}
 
 
 # ----------------------------------------------------------------------------
@@ -438,7 +845,61 @@ def findings(results: dict) -> list[str]:
                    all(r["ratio"] < 1.05 for r in g["lobes"]) else
                    "above 1.05 somewhere: a dead lobe may still be traced (a bug)")
         out.append(f"Lobes switched off, time against the model without them: {ratios} ({verdict}).")
+    if g.get("materials"):
+        out.append(materials_finding(g["materials"]))
+    if g.get("frozen"):
+        rows = g["frozen"]
+        traced = {r["passes"]: r for r in rows if not r["frozen"]}
+        frozen = {r["passes"]: r for r in rows if r["frozen"]}
+        parts = ", ".join(f"{p} passes {traced[p]['first_vs_1_pass']:.2f}x traced and "
+                          f"{r['first_vs_1_pass']:.2f}x frozen" for p, r in frozen.items())
+        out.append(f"Rendering in passes ({rows[0]['materials']} cook_torrance materials, "
+                   f"{rows[0]['spp']} spp in all, the first render_passes call of a fresh process "
+                   f"as in mi-brdfs render), time against one pass: {parts}.")
+    if g.get("kernels"):
+        rows = g["kernels"]
+        parts = "; ".join(
+            f"{name}: " + ", ".join(f"{r['method']} {r['ratio']:.2f}" for r in rows
+                                    if r["name"] == name)
+            for name in dict.fromkeys(r["name"] for r in rows))
+        out.append(f"BSDF kernels ({rows[0]['lanes']} direction pairs), plugin / built-in kernel "
+                   f"execution time: {parts}.")
+    if g.get("tracing"):
+        rows = g["tracing"]
+        name = rows[0]["name"]
+        r = {row["method"]: row for row in rows if row["name"] == name}
+        out.append(
+            f"Tracing one call ({name}): sample {r['sample']['plugin_ms']:.3f} ms vs "
+            f"{r['sample']['builtin_ms']:.3f} ms ({r['sample']['ratio']:.1f}x), eval_pdf "
+            f"{r['eval_pdf']['plugin_ms']:.3f} vs {r['eval_pdf']['builtin_ms']:.3f} ms "
+            f"({r['eval_pdf']['ratio']:.1f}x). Tracing a path-traced render calls each "
+            f"instance's sample {r['sample']['render_calls']} and eval_pdf "
+            f"{r['eval_pdf']['render_calls']} times (eval and pdf "
+            f"{r['eval']['render_calls_all']} times, as sample calls eval_pdf again); one "
+            f"sample call evaluates textures {r['sample']['texture_evals']} times and builds "
+            f"{r['sample']['microfacet_objects']} MicrofacetDistribution objects.")
     return out
+
+
+def materials_finding(rows: list[dict]) -> str:
+    """Plugin vs built-in at the largest number of materials, and the tracing
+    cost per material (slope of the warm render's tracing time over N)."""
+    most = max(r["materials"] for r in rows)
+    ratios = ", ".join(
+        f"{r['name'].split(' vs ')[0]} {r['warm_ratio']:.2f}x (first render "
+        f"{r['first_ratio']:.2f}x, kernel execution {r['execution_ratio']:.2f}x, peak memory "
+        f"{r['plugin_peak_mib']:.0f} vs {r['builtin_peak_mib']:.0f} MiB)"
+        for r in rows if r["materials"] == most)
+    slopes = []
+    for name in dict.fromkeys(r["name"] for r in rows):
+        pair = [r for r in rows if r["name"] == name]
+        if len(pair) > 1:
+            n = [r["materials"] for r in pair]
+            per = [1e3 * np.polyfit(n, [r[f"{side}_tracing_s"] for r in pair], 1)[0]
+                   for side in ("plugin", "builtin")]
+            slopes.append(f"{name} {per[0]:.2f} vs {per[1]:.2f} ms")
+    return (f"{most} spheres, each with its own material: plugin / built-in warm render time "
+            f"{ratios}. Tracing per material (plugin vs built-in): {', '.join(slopes)}.")
 
 
 def _fmt(v) -> str:
@@ -465,10 +926,14 @@ def write_outputs(out_dir: str, results: dict) -> None:
     write_atomically(os.path.join(out_dir, "results.csv"), write_csv)
 
     lines = ["# mi-brdfs bench results", "",
-             f"{results['settings_name']} run, {results['seconds']:.0f} s. Machine: "
+             f"{results['settings_name']} run, {results['seconds']:.0f} s ("
+             + ", ".join(f"{g} {t:.0f} s" for g, t in results.get("group_seconds", {}).items())
+             + "). Machine: "
              + ", ".join(f"{k} {v}" for k, v in results["machine"].items()) + ".", "",
              "Timings are medians of repeated renders after a warm-up (compile) render, "
-             "in one process; errors are relative MSE against a converged reference.", "",
+             "in one process (materials, frozen, kernels, tracing: in processes of their own, "
+             "as Dr.Jit traces every BSDF instance alive in the process); errors are relative "
+             "MSE against a converged reference.", "",
              "## Findings", "", *(f"- {line}" for line in findings(results)), ""]
     for group, rows in results["groups"].items():
         if not rows:
@@ -557,6 +1022,31 @@ def plots(out_dir: str, results: dict) -> dict[str, list[str]]:
     if g.get("integrators"):
         scatter("integrators", g["integrators"], lambda r: r["name"], "median_s", "relmse",
                 "vs converged path tracing", "integrators.png")
+    if g.get("materials"):
+        fig = Figure(figsize=(8, 3.2))
+        names = list(dict.fromkeys(r["name"] for r in g["materials"]))
+        for ax, name in zip(fig.subplots(1, len(names), squeeze=False)[0], names):
+            rows = [r for r in g["materials"] if r["name"] == name]
+            n = [r["materials"] for r in rows]
+            for side, style in (("plugin", "o-"), ("builtin", "s--")):
+                ax.plot(n, [r[f"{side}_warm_s"] for r in rows], style, label=f"{side} warm")
+                ax.plot(n, [r[f"{side}_tracing_s"] for r in rows], style, alpha=0.5,
+                        label=f"{side} tracing")
+            ax.set_xlabel("materials")
+            ax.set_ylabel("seconds")
+            ax.set_title(name, fontsize=8)
+            ax.legend(fontsize=6)
+        save(fig, "materials", "materials.png")
+    if g.get("frozen"):
+        rows = [{"name": f"{r['passes']} passes{' frozen' if r['frozen'] else ''}",
+                 "first_vs_1_pass": r["first_vs_1_pass"]} for r in g["frozen"]]
+        bars("frozen", rows, "first_vs_1_pass", "time / one pass's (same spp)", "frozen.png")
+    for group in ("kernels", "tracing"):
+        if g.get(group):
+            rows = [{"name": f"{r['name'].split(' vs ')[0]}: {r['method']}", "ratio": r["ratio"]}
+                    for r in g[group]]
+            what = "kernel execution" if group == "kernels" else "tracing one call"
+            bars(group, rows, "ratio", f"plugin / built-in, {what} (parity: 1)", f"{group}.png")
     return made
 
 
@@ -573,12 +1063,21 @@ def run(out_dir: str, quick: bool = False, only: list[str] | None = None,
     refs = References(cache, settings.ref_spp)
     start = time.perf_counter()
     results = {"settings_name": "quick" if quick else "full", "settings": settings.__dict__,
-               "machine": machine(), "groups": {}}
+               "machine": machine(), "groups": {}, "group_seconds": {}}
     for g in groups:
         log(f"bench: {g} ...")
+        group_start = time.perf_counter()
         results["groups"][g] = RUNNERS[g](settings, refs)
+        results["group_seconds"][g] = time.perf_counter() - group_start
     results["seconds"] = time.perf_counter() - start
     os.makedirs(out_dir, exist_ok=True)
     results["plots"] = plots(out_dir, results)
     write_outputs(out_dir, results)
     return results
+
+
+if __name__ == "__main__":
+    import sys
+    if len(sys.argv) == 4 and sys.argv[1] == "--worker":
+        sys.exit(worker_main(sys.argv[2], sys.argv[3]))
+    sys.exit("usage: python -m mi_brdfs.tools.bench --worker TASK OPTIONS_JSON (else: mi-brdfs bench)")

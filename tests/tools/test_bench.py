@@ -99,3 +99,53 @@ def test_dead_lobes_are_not_traced(results):
     assert not rows["phong m_S=0 vs lambert"]["glossy_lobe"]
     assert not rows["ward m_D=0 vs ward m_D=0.5"]["diffuse_lobe"]
     assert rows["ward m_D=0 vs ward m_D=0.5"]["glossy_lobe"]
+
+
+def test_spheres_scene_has_one_material_per_sphere():
+    import mitsuba as mi
+    d = bench.spheres_scene("cook_torrance", 7, 8)
+    spheres = [v for k, v in d.items() if k.startswith("sphere")]
+    assert len(spheres) == 7
+    assert len({s["bsdf"]["alpha"] for s in spheres}) == 7          # seven different materials
+    assert len(mi.load_dict(d, parallel=False).shapes()) == 7
+
+
+def test_materials_each_kind_and_count_in_its_own_process(results):
+    _, r, _ = results
+    rows = r["groups"]["materials"]
+    assert {(row["name"], row["materials"]) for row in rows} == {
+        (f"{p} vs {b}", n) for p, b in bench.MATERIAL_PAIRS for n in bench.QUICK.materials}
+    for row in rows:
+        for side in ("plugin", "builtin"):
+            assert row[f"{side}_peak_mib"] > 10                     # measured by the child
+            assert row[f"{side}_first_s"] >= row[f"{side}_first_codegen_s"] > 0
+            assert row[f"{side}_execution_s"] > 0
+
+
+def test_frozen_passes_replay(results):
+    _, r, _ = results
+    rows = r["groups"]["frozen"]
+    assert {(row["passes"], row["frozen"]) for row in rows} == (
+        {(1, False)} | {(p, f) for p in bench.QUICK.frozen_passes[1:] for f in (False, True)})
+    for row in rows:
+        if row["frozen"]:
+            assert row["note"] == (f"{row['passes']} passes frozen: 1 traced, "
+                                   f"{row['passes'] - 1} replayed")
+    assert next(row for row in rows if row["passes"] == 1)["first_vs_1_pass"] == 1
+
+
+def test_kernels_and_tracing_every_pair_and_method(results):
+    _, r, _ = results
+    pairs = {name for name, _, _ in bench.BSDF_PAIRS}
+    for group, names in (("kernels", pairs), ("tracing", pairs | {bench.TWO_LOBES[0]})):
+        rows = r["groups"][group]
+        assert {(row["name"], row["method"]) for row in rows} == {
+            (n, m) for n in names for m in bench.BSDF_METHODS}
+        assert all(row["ratio"] > 0 for row in rows)
+    assert all(row["plugin_ops"] > 0 and row["builtin_ops"] > 0 for row in r["groups"]["kernels"])
+    tracing = {(row["name"], row["method"]): row for row in r["groups"]["tracing"]}
+    sample = tracing[(bench.BSDF_PAIRS[0][0], "sample")]
+    # The path tracer calls sample and eval_pdf; the plugin's sample calls eval_pdf again.
+    assert sample["render_calls"] >= 1
+    assert tracing[(bench.BSDF_PAIRS[0][0], "eval_pdf")]["render_calls"] >= 1
+    assert "eval_pdf x1" in sample["inner_calls"] and sample["texture_evals"] >= 2

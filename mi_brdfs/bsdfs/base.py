@@ -64,6 +64,12 @@ from . import energy
 
 MODES = ("scanline", "hdr")
 SAMPLINGS = ("lobe", "cosine")    # each lobe's own importance sampling, or cosine for all
+PDF_FLOOR = 1e-37                 # 1/pdf stays finite in float32 (the weight's scaling)
+WEIGHT_MAX = 1e12                 # sample weights above this are float32 failures (see sample())
+# "On the surface": a viewer or light with cos θ <= HORIZON gets no reflection.
+# Above it every value is exact; below it the derivatives of near-mirror lobes
+# (alpha 1e-4: d pdf/d alpha ~ 1/(2 pi alpha³ cos θ)) would exceed float32.
+HORIZON = 1e-20
 
 
 class ParameterError(ValueError):
@@ -100,6 +106,20 @@ class Param:
     def probe_hi(self) -> float:
         """The largest value the tests try (hi, or ``upper``, or 1)."""
         return self.hi if self.hi is not None else (self.upper if self.upper is not None else 1.0)
+
+
+@dataclass(frozen=True)
+class Option:
+    """A non-differentiable choice: one of ``choices`` (strings), or a boolean
+    when ``default`` is a bool. Read at load time into ``self.<name>``."""
+    name: str
+    default: str | bool
+    choices: tuple[str, ...] = ()
+
+    def valid(self) -> str:
+        if isinstance(self.default, bool):
+            return "true or false"
+        return "one of " + ", ".join(f'"{c}"' for c in self.choices)
 
 
 def _fmt(x: float | None, none: str) -> str:
@@ -203,16 +223,16 @@ class Reader:
             self.check(p.name, rng[0], p.lo, p.hi)
             self.check(p.name, rng[1], p.lo, p.hi)
 
-    def choice(self, name: str, default: str, options: tuple[str, ...]) -> str:
-        value = str(self.props.get(name, default))
-        if value not in options:
-            raise self.error(name, value, "one of " + ", ".join(f'"{o}"' for o in options))
-        return value
-
-    def boolean(self, name: str, default: bool) -> bool:
-        value = self.props.get(name, default)
-        if not isinstance(value, bool):
-            raise self.error(name, value, "true or false")
+    def option(self, o: Option):
+        """The value of option ``o`` (a string among its choices, or a bool)."""
+        value = self.props.get(o.name, o.default)
+        if isinstance(o.default, bool):
+            if not isinstance(value, bool):
+                raise self.error(o.name, value, o.valid())
+            return value
+        value = str(value)
+        if value not in o.choices:
+            raise self.error(o.name, value, o.valid())
         return value
 
 
@@ -222,8 +242,10 @@ def mean(spectrum) -> mi.Float:
 
 
 def clamp01(x):
-    """The lecture's clamp() per colour channel; NaN-free (fmin/fmax drop NaN)."""
-    return dr.fmin(dr.fmax(x, 0.0), 1.0)
+    """The lecture's clamp() per colour channel; NaN-free (fmin drops NaN). At
+    x = 0 (a black colour) the derivative is the one from above, 1: an
+    optimiser starting from black can leave it."""
+    return dr.fmin(dr.select(x >= 0.0, x, 0.0), 1.0)
 
 
 class Lobes(NamedTuple):
@@ -241,30 +263,39 @@ class BRDF:
     """Base of every mi_brdfs plugin (plain Python; bound to mi.BSDF by bind())."""
 
     name = "brdf"                     # the registered plugin name
+    OPTIONS: tuple[Option, ...] = ()
     PARAMS: tuple[Param, ...] = ()
+    reciprocal = True                 # hdr mode: f(wi, wo) = f(wo, wi) (the tests check it)
     compensable = False               # has an energy_compensation parameter
     compensates = "specular"          # the lobe the multiple-scattering lobe belongs to
 
     def __init__(self, props: mi.Properties):
         mi.BSDF.__init__(self, props)
         reader = Reader(self.name, props)
-        self.mode = reader.choice("mode", "hdr", MODES)
-        # "cosine" samples every lobe from the cosine hemisphere: for measuring
-        # what importance sampling gains (mi-brdfs bench), not for rendering.
-        self.sampling = reader.choice("sampling", "lobe", SAMPLINGS)
         self.energy_compensation = False
-        if self.compensable:
-            self.energy_compensation = reader.boolean("energy_compensation", False)
-            if self.energy_compensation and self.mode == "scanline":
-                raise reader.error("energy_compensation", True,
-                                   'false with mode="scanline" (the lecture\'s scan-line '
-                                   'formulas are not normalised; compensation is for mode="hdr")')
+        for o in self.options():
+            setattr(self, o.name, reader.option(o))
+        if self.energy_compensation and self.mode == "scanline":
+            raise reader.error("energy_compensation", True,
+                               'false with mode="scanline" (the lecture\'s scan-line '
+                               'formulas are not normalised; compensation is for mode="hdr")')
         self.params: dict[str, Param] = {}     # the parameters read, by name
         self.live: set[str] = set()            # parameters updated or differentiated
         self.read(reader)
         self.update_lobes()
 
-    # --- parameters --------------------------------------------------------------
+    # --- options and parameters ----------------------------------------------------
+    @classmethod
+    def options(cls) -> tuple[Option, ...]:
+        """Every option: the base's (mode, sampling, energy_compensation) and the model's."""
+        base = (Option("mode", "hdr", MODES),
+                # "cosine" samples every lobe from the cosine hemisphere: for measuring
+                # what importance sampling gains (mi-brdfs bench), not for rendering.
+                Option("sampling", "lobe", SAMPLINGS))
+        if cls.compensable:
+            base += (Option("energy_compensation", False),)
+        return base + cls.OPTIONS
+
     def read(self, reader: Reader) -> None:
         """Read every declared parameter (override to read options too)."""
         for p in self.PARAMS:
@@ -430,13 +461,15 @@ class BRDF:
         use = self.enabled(ctx)
         bs = dr.zeros(mi.BSDFSample3f)
         cos_i = mi.Frame3f.cos_theta(si.wi)
-        active = mi.Bool(active) & (cos_i > 0)
+        active = mi.Bool(active) & (cos_i > HORIZON)
         if not any(use):
             return bs, self.spectrum(mi.UnpolarizedSpectrum(0.0))
         inp = self.inputs(si, active)
         p_d, p_s, _ = probs = self.probabilities(inp, si, use)
+        # (comparisons, not ~: scalar variants' masks are Python bools)
         pick_d = mi.Bool(sample1 < p_d)
-        pick_s = ~pick_d & (sample1 < p_d + p_s) if use.multiple else ~pick_d
+        not_d = mi.Bool(sample1 >= p_d)
+        pick_s = not_d & (sample1 < p_d + p_s) if use.multiple else not_d
         if self.sampling == "cosine":
             wo = mi.warp.square_to_cosine_hemisphere(sample2)
         else:
@@ -446,19 +479,41 @@ class BRDF:
             if use.specular:
                 wo = dr.select(pick_s, self.sample_specular(inp, si, sample2), wo)
 
+        # The sampled direction is a fixed point for the derivatives (as Mitsuba's
+        # differentiable integrators treat it): the weight's gradient is that of
+        # eval/pdf there, not of the sampler's warping.
+        wo = dr.detach(wo)
+        # A sampler may fail at the corners of its domain (Mitsuba's visible-normal
+        # sampling gives NaN for u = (0, 0) at normal incidence): such a sample is
+        # discarded, and evaluated on a benign stand-in so that no NaN reaches the
+        # derivatives of the other lanes.
+        valid = dr.isfinite(wo.x) & dr.isfinite(wo.y) & dr.isfinite(wo.z)
+        wo = dr.select(valid, wo, mi.Vector3f(0.0, 0.0, 1.0))
+        active &= valid
         value, pdf = self.lobes_eval(use, inp, si, wo, active), \
             self.lobes_pdf(use, probs, inp, si, wo, active)
-        active &= (pdf > 0) & (mi.Frame3f.cos_theta(wo) > 0)
+        active &= (pdf > 0) & (mi.Frame3f.cos_theta(wo) > HORIZON)
+        # A weight beyond WEIGHT_MAX is no sample of the model but float32 failing
+        # it: a near-mirror lobe at a grazing viewer (alpha 1e-4, cos 1e-30) puts
+        # wo = reflect(wi, m) so close to -wi that wi + wo no longer holds m, and
+        # eval and pdf are taken about another half vector. Discarded.
+        active &= mean(value) <= WEIGHT_MAX * pdf
         diffuse_t = mi.UInt32(+mi.BSDFFlags.DiffuseReflection)
         glossy_t = mi.UInt32(+mi.BSDFFlags.GlossyReflection)
-        glossy = ~pick_d if self.compensates == "specular" else pick_s
+        glossy = not_d if self.compensates == "specular" else pick_s
         bs.wo = dr.select(active, wo, 0.0)      # no NaN from inactive lanes either
         bs.pdf = dr.select(active, pdf, 0.0)
         bs.eta = 1.0
         bs.sampled_type = dr.select(glossy, glossy_t, diffuse_t)
         bs.sampled_component = dr.select(glossy, mi.UInt32(self.specular_index),
                                          mi.UInt32(self.diffuse_index))
-        weight = value / dr.select(active, pdf, 1.0)
+        # weight = value / pdf, both scaled by a detached 1/pdf first: the same
+        # value, and derivatives without pdf² (which underflows for the tiny pdfs
+        # of grazing samples and would turn the gradient into inf - inf).
+        pdf = dr.select(active, pdf, 1.0)
+        value = dr.select(active, value, 0.0)
+        scale = dr.detach(1.0 / dr.fmax(pdf, PDF_FLOOR))
+        weight = (value * scale) / (pdf * scale)
         return bs, self.spectrum(dr.select(active, weight, 0.0))
 
     def eval(self, ctx, si, wo, active=True):
@@ -487,10 +542,10 @@ class BRDF:
     def lobes_eval(self, use: Lobes, inp, si, wo, active):
         cos_i = mi.Frame3f.cos_theta(si.wi)
         cos_o = mi.Frame3f.cos_theta(wo)
-        # A viewer or light below (or exactly on) the surface gets no reflection.
-        active = mi.Bool(active) & (cos_i > 0)
+        # A viewer or light below (or on) the surface gets no reflection.
+        active = mi.Bool(active) & (cos_i > HORIZON)
         if not self.lit_from_behind():
-            active &= cos_o > 0
+            active &= cos_o > HORIZON
         w_d, w_s = self.lobe_weights(inp)
         clamp = clamp01 if self.mode == "scanline" else (lambda x: x)
         value = mi.UnpolarizedSpectrum(0.0)
@@ -506,7 +561,7 @@ class BRDF:
     def lobes_pdf(self, use: Lobes, probs, inp, si, wo, active):
         cos_i = mi.Frame3f.cos_theta(si.wi)
         cos_o = mi.Frame3f.cos_theta(wo)
-        active = mi.Bool(active) & (cos_i > 0) & (cos_o > 0)
+        active = mi.Bool(active) & (cos_i > HORIZON) & (cos_o > HORIZON)
         cosine = mi.warp.square_to_cosine_hemisphere_pdf(wo)
         if self.sampling == "cosine":
             return dr.select(active, cosine, 0.0)
@@ -534,9 +589,8 @@ class BRDF:
         return f"{type(self).__name__}[mode={self.mode}, {fields}]"
 
     def describe(self) -> dict:
-        fields = {name: getattr(self, "m_" + name) for name in self.params}
-        if self.compensable:
-            fields["energy_compensation"] = self.energy_compensation
+        fields = {o.name: getattr(self, o.name) for o in self.options() if o.name != "mode"}
+        fields.update({name: getattr(self, "m_" + name) for name in self.params})
         return fields
 
 

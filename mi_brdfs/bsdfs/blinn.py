@@ -86,7 +86,7 @@ from __future__ import annotations
 import drjit as dr
 import mitsuba as mi
 
-from . import powercos
+from . import microfacet as mf, powercos
 from .phong import Phong
 
 
@@ -95,8 +95,9 @@ from .phong import Phong
 # ----------------------------------------------------------------------------
 
 def cos_h(wi, wo):
-    """(n·h, 1 - n·h) of h = normalize(d + w_r); (0, 1) when d = -w_r."""
-    return powercos.cos_versin_z(wi + wo)
+    """(n·h, 1 - n·h) of h = normalize(d + w_r) (scale-safe: exact for grazing
+    pairs, whose |d + w_r|² underflows); (0, 1) when d = -w_r."""
+    return powercos.cos_versin_z(mf.half_vector(wi, wo))
 
 
 def normalisation(gamma):
@@ -135,9 +136,9 @@ def sample_lobe(wi, sample2, gamma):
 
 def pdf_lobe(wi, wo, gamma):
     """Density of sample_lobe() at wo: pdf(h) / (4 d·h), 0 where d·h <= 0."""
-    v = wi + wo                                        # unnormalised h
-    c, versin = powercos.cos_versin_z(v)
-    o_dot_h = dr.dot(wo, v) * dr.rsqrt(dr.fmax(dr.squared_norm(v), powercos.TINY))
+    h = mf.half_vector(wi, wo)
+    c, versin = powercos.cos_versin_z(h)
+    o_dot_h = dr.dot(wo, h)
     valid = o_dot_h > 0.0
     jacobian = 1.0 / (4.0 * dr.select(valid, o_dot_h, 1.0))    # dh/dwo
     return dr.select(valid, powercos.pdf(c, versin, gamma + 1.0) * jacobian, 0.0)

@@ -93,7 +93,7 @@ import drjit as dr
 import mitsuba as mi
 
 from . import energy, lambert, microfacet as mf
-from .base import BRDF, Param, Reader, mean
+from .base import BRDF, Option, Param, Reader, mean
 from .grid import Axis
 
 
@@ -123,18 +123,14 @@ def specular(wi, wo, alpha, f0, distribution: str, geometry: str):
     return d * f * g_over_4cos
 
 
-MICROFACET_TYPE = {"beckmann": "Beckmann", "ggx": "GGX"}
-
-
 def sample_lobe(wi, sample2, alpha, distribution: str, visible: bool = True):
     """A light direction for the specular lobe: sample m, the microfacet normal
-    (the visible normals of Beckmann and GGX with Mitsuba's
-    ``MicrofacetDistribution``, D(m) cos(theta_m) for Blinn), reflect w_r about it."""
-    if distribution == "blinn":
-        m = mf.sample_blinn(sample2, alpha)
+    (the visible normals of Beckmann and GGX, or D(m) cos(theta_m), always for
+    Blinn; :mod:`.microfacet`), and reflect w_r about it."""
+    if visible and distribution != "blinn":
+        m = mf.sample_visible(distribution, wi, sample2, alpha)
     else:
-        kind = getattr(mi.MicrofacetType, MICROFACET_TYPE[distribution])
-        m, _ = mi.MicrofacetDistribution(kind, alpha, visible).sample(wi, sample2)
+        m = mf.sample_full(distribution, sample2, alpha)
     return mi.reflect(wi, m)
 
 
@@ -142,12 +138,11 @@ def pdf_lobe(wi, wo, alpha, distribution: str, visible: bool = True):
     """Density of sample_lobe() at wo: pdf(m) / (4 wo·m), m the half vector."""
     h = mf.half_vector(wi, wo)
     o_dot_h = dr.dot(wo, h)
-    jacobian = 1.0 / (4.0 * dr.fmax(o_dot_h, mf.TINY))      # dm/dwo
-    if distribution == "blinn":
-        pdf_m = mf.pdf_blinn(h, alpha)
+    if visible and distribution != "blinn":
+        pdf_m = mf.pdf_visible(distribution, wi, h, alpha)
     else:
-        kind = getattr(mi.MicrofacetType, MICROFACET_TYPE[distribution])
-        pdf_m = mi.MicrofacetDistribution(kind, alpha, visible).pdf(wi, h)
+        pdf_m = mf.pdf_full(distribution, h, alpha)
+    jacobian = 1.0 / (4.0 * dr.select(o_dot_h > 0, o_dot_h, 1.0))      # dm/dwo
     return dr.select(o_dot_h > 0, pdf_m * jacobian, 0.0)
 
 
@@ -171,6 +166,9 @@ def albedo_spec(distribution: str, geometry: str) -> energy.AlbedoSpec:
 class CookTorrance(BRDF):
     name = "cook_torrance"
     compensable = True
+    OPTIONS = (Option("distribution", "beckmann", mf.DISTRIBUTIONS),
+               Option("geometry", "cook_torrance", mf.GEOMETRIES),
+               Option("sample_visible", True))
     PARAMS = (
         Param("diffuse_reflectance", 0.5),                                   # m_D
         Param("specular_reflectance", 1.0),                                  # m_S
@@ -180,9 +178,6 @@ class CookTorrance(BRDF):
     )
 
     def read(self, reader: Reader) -> None:
-        self.distribution = reader.choice("distribution", "beckmann", mf.DISTRIBUTIONS)
-        self.geometry = reader.choice("geometry", "cook_torrance", mf.GEOMETRIES)
-        self.sample_visible = reader.boolean("sample_visible", True)
         for p in self.PARAMS:
             if p.name == "alpha" and self.distribution == "blinn":
                 p = replace(p, hi=1.0)                       # Blinn: 2/rho² - 2 >= 0
@@ -245,7 +240,3 @@ class CookTorrance(BRDF):
 
     def ms_colour(self, inp):
         return inp.m_s * mf.fresnel_average(self.m_f0)
-
-    def describe(self) -> dict:
-        return {"distribution": self.distribution, "geometry": self.geometry,
-                **BRDF.describe(self)}

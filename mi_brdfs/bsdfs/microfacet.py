@@ -61,7 +61,7 @@ def half_vector(wi, wo):
 
 def sin_theta(v):
     """sin θ of a unit local direction, from x and y (exact near the normal)."""
-    return dr.sqrt(dr.square(v.x) + dr.square(v.y))
+    return dr.safe_sqrt(dr.square(v.x) + dr.square(v.y))     # safe: finite derivative at 0
 
 
 # ----------------------------------------------------------------------------
@@ -150,14 +150,14 @@ def g1_beckmann_over_cos(v, alpha):
 
 # --- the Smith G1 of the Blinn distribution, tabulated -----------------------
 
-def _blinn_projected_area(mu: np.ndarray, rho: float, n: int = 1024) -> np.ndarray:
+def _blinn_projected_area(mu: np.ndarray, rho: float, nodes) -> np.ndarray:
     """∫ max(0, v·m) D_blinn(m) dm for directions v at cos θ = mu (float64, NumPy).
 
     θ_m through tan θ_m = rho x, x = s/(1 - s), Gauss-Legendre in s (the D
     lobe is ~rho wide); the azimuth integral of max(0, a cos φ + b) is
     2 (sqrt(a² - b²) + b acos(-b/a)) for a > b, else 2 pi b.
     """
-    xs, ws = np.polynomial.legendre.leggauss(n)
+    xs, ws = nodes
     s, w = 0.5 * (xs + 1.0), 0.5 * ws
     x, dx = s / (1.0 - s), w / (1.0 - s) ** 2
     theta_m = np.arctan(rho * x)
@@ -191,9 +191,10 @@ def _g1_blinn_table() -> np.ndarray:
     a = t[:-1] / (1.0 - t[:-1])
     values = np.ones((len(t), G1_BLINN_AXES[1].n))
     values[:-1, 0] = _g1_beckmann_np(a)
+    nodes = np.polynomial.legendre.leggauss(512)         # ~10 ms, once
     for j, rho in enumerate(G1_BLINN_AXES[1].nodes()[1:], start=1):
         mu = a * rho / np.sqrt(1.0 + (a * rho) ** 2)
-        values[:-1, j] = np.minimum(mu / _blinn_projected_area(mu, rho), 1.0)
+        values[:-1, j] = np.minimum(mu / _blinn_projected_area(mu, rho, nodes), 1.0)
     values[0, :] = 0.0
     return values
 
@@ -235,7 +236,74 @@ def g_smith(distribution, wi, wo, alpha):
 
 
 # ----------------------------------------------------------------------------
-#  Sampling the Blinn distribution (Mitsuba samples Beckmann and GGX itself)
+#  Sampling microfacet normals
+# ----------------------------------------------------------------------------
+#
+# Visible normals (Heitz 2018, "Sampling the GGX distribution of visible
+# normals"): m with density D_wi(m) = G1(wi)/cos θ_i · max(0, wi·m) D(m). GGX
+# by Dupuy & Benyoub's spherical caps (2023, "Sampling visible GGX normals with
+# spherical caps"); Beckmann by Mitsuba's MicrofacetDistribution (Jakob's
+# inversion of the visible-slope cdf). The density is ours for both: with the
+# exact, scale-safe G1/cos above, so sampler and pdf agree at any angle.
+# The full distribution: m with density D(m) cos θ_m; Blinn always.
+
+def _normalize(v):
+    """v / |v| for a vector whose largest component is not tiny (|v| >= ~1e-19)."""
+    return v * dr.rsqrt(dr.fmax(dr.squared_norm(v), TINY * TINY))
+
+
+def sample_ggx_visible(wi, sample2, alpha):
+    """A GGX visible normal for the viewer wi (spherical caps)."""
+    # the viewer in the hemisphere configuration (roughness 1)
+    v = _normalize(mi.Vector3f(alpha * wi.x, alpha * wi.y, dr.fmax(wi.z, 0.0)))
+    phi = dr.two_pi * sample2.x
+    z = dr.fma(1.0 - sample2.y, 1.0 + v.z, -v.z)          # uniform on the spherical cap
+    sin_t = dr.safe_sqrt(1.0 - dr.square(z))
+    s, c = dr.sincos(phi)
+    h = mi.Vector3f(c * sin_t + v.x, s * sin_t + v.y, z + v.z)
+    # back to the ellipsoid configuration
+    return _normalize(mi.Vector3f(alpha * h.x, alpha * h.y, dr.fmax(h.z, 0.0)))
+
+
+def sample_full(distribution: str, sample2, alpha):
+    """m with density D(m) cos θ_m: tan²θ_m = rho² u/(1 - u) (GGX),
+    -rho² log(1 - u) (Beckmann); Blinn through powercos."""
+    if distribution == "blinn":
+        return sample_blinn(sample2, alpha)
+    u = dr.fmin(sample2.x, 1.0 - 2.0**-24)
+    if distribution == "ggx":
+        tan2 = dr.square(alpha) * u / (1.0 - u)
+    else:
+        tan2 = -dr.square(alpha) * dr.log(1.0 - u)
+    cos_t = dr.rsqrt(1.0 + tan2)
+    sin_t = dr.safe_sqrt(tan2) * cos_t
+    s, c = dr.sincos(dr.two_pi * sample2.y)
+    return mi.Vector3f(c * sin_t, s * sin_t, cos_t)
+
+
+def pdf_full(distribution: str, m, alpha):
+    """Density of sample_full() over microfacet normals: D(m) cos θ_m."""
+    if distribution == "blinn":
+        return pdf_blinn(m, alpha)
+    return D[distribution](m, alpha) * dr.fmax(m.z, 0.0)
+
+
+def sample_visible(distribution: str, wi, sample2, alpha):
+    """A visible normal of GGX or Beckmann for the viewer wi."""
+    if distribution == "ggx":
+        return sample_ggx_visible(wi, sample2, alpha)
+    m, _ = mi.MicrofacetDistribution(mi.MicrofacetType.Beckmann, alpha, True).sample(wi, sample2)
+    return m
+
+
+def pdf_visible(distribution: str, wi, m, alpha):
+    """D_wi(m) = G1(wi)/cos θ_i · max(0, wi·m) D(m), without dividing by cos θ_i."""
+    return G1_OVER_COS[distribution](wi, alpha) * dr.fmax(dr.dot(wi, m), 0.0) \
+        * D[distribution](m, alpha)
+
+
+# ----------------------------------------------------------------------------
+#  Sampling the Blinn distribution (its D(m) cos θ_m is a power-cosine lobe)
 # ----------------------------------------------------------------------------
 
 def sample_blinn(sample2, alpha):

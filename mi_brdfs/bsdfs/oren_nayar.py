@@ -103,7 +103,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from .base import BRDF, Param, Reader
+from .base import BRDF, Option, Param, Reader
 from .grid import Axis, Grid
 
 METHODS = ("exact", "table")
@@ -203,7 +203,7 @@ def fon_albedo(mu, r):
     G = S (acos μ - S μ) + 2/3 ((S/μ)(1 - S³) - S), S = sqrt(1 - μ²);
     (S/μ)(1 - S³) written as S μ (1 + S + S²)/(1 + S) (finite at μ = 0)."""
     mu = dr.fmin(dr.fmax(mu, 0.0), 1.0)
-    s = dr.sqrt(dr.fmax(1.0 - dr.square(mu), 0.0))
+    s = dr.safe_sqrt(1.0 - dr.square(mu))
     g = s * (dr.acos(mu) - s * mu) \
         + (2.0 / 3.0) * (s * mu * (1.0 + s + dr.square(s)) / (1.0 + s) - s)
     a = 1.0 / (1.0 + FON_C1 * r)
@@ -223,12 +223,12 @@ class OrenNayar(BRDF):
     name = "oren_nayar"
     compensable = True
     compensates = "diffuse"
+    OPTIONS = (Option("method", "exact", METHODS),)
     PARAMS = (Param("reflectance", 0.5),                                          # m_D
               Param("sigma", 0.3, 0.0, SIGMA_MAX, kind="scalar", role="shape"))   # σ
 
     def read(self, reader: Reader) -> None:
         BRDF.read(self, reader)        # (no super(): plugin classes are rebuilt per variant)
-        self.method = reader.choice("method", "exact", METHODS)
         self.table_resolution = None
         self.table = None                   # T(p, q) = sin α tan β
         if "table_resolution" in reader.props and self.method != "table":
@@ -276,7 +276,7 @@ class OrenNayar(BRDF):
         return inp.m_d
 
     def describe(self) -> dict:
-        fields = {**BRDF.describe(self), "method": self.method}
+        fields = BRDF.describe(self)
         if self.method == "table":
             fields["table_resolution"] = self.table_resolution
         return fields

@@ -68,7 +68,7 @@ def expm1(x):
     um1 = u - 1.0
     tiny = u == 1.0
     minus_one = um1 == -1.0
-    plain = ~(tiny | minus_one)
+    plain = (u != 1.0) & (um1 != -1.0)      # (not ~: scalar variants' masks are bools)
     lu = dr.log(dr.select(plain, u, 2.0))            # benign stand-in: log 2 != 0
     ratio = um1 * dr.select(plain, x, 1.0) / lu
     return dr.select(tiny, x, dr.select(minus_one, -1.0, ratio))

@@ -130,7 +130,7 @@ import drjit as dr
 import mitsuba as mi
 
 from . import microfacet as mf
-from .base import BRDF, Param, Reader, mean
+from .base import BRDF, Option, Param, Reader, mean
 
 SPECULAR_MODELS = ("phong", "blinn")
 CONE_MIN = 1e-4            # smallest 1 - cos(half-angle) of the sampling cone
@@ -190,7 +190,7 @@ def square_to_cone(sample2, k):
     in sin θ = sqrt(u k (2 - u k)))."""
     uk = sample2.x * k
     cos_t = 1.0 - uk
-    sin_t = dr.sqrt(dr.fmax(uk * (2.0 - uk), 0.0))
+    sin_t = dr.safe_sqrt(uk * (2.0 - uk))            # safe: a finite derivative at 0
     s, c = dr.sincos(2.0 * dr.pi * sample2.y)
     return mi.Vector3f(c * sin_t, s * sin_t, cos_t)
 
@@ -212,6 +212,7 @@ HDR_SCALE = 1.0 / (2.0 * math.pi)     # hdr: a constant colour c reflects c over
 class Toon(BRDF):
     name = "toon"
     reciprocal = False
+    OPTIONS = (Option("specular_model", "phong", SPECULAR_MODELS),)
     PARAMS = (
         Param("diffuse_reflectance", 0.8),                                       # m_D1
         Param("diffuse_shade", 0.2),                                             # m_D2
@@ -226,7 +227,6 @@ class Toon(BRDF):
 
     def read(self, reader: Reader) -> None:
         props = reader.props
-        self.specular_model = reader.choice("specular_model", "phong", SPECULAR_MODELS)
         decl = {p.name: p for p in self.PARAMS}
         ramps = {}
         for ramp, replaced in (("diffuse_ramp", DIFFUSE_STEP), ("specular_ramp", SPECULAR_STEP)):
@@ -368,6 +368,3 @@ class Toon(BRDF):
             o_dot_h = dr.dot(wo, h)
             pdf_cone = dr.select(o_dot_h > 0, pdf_cone / (4.0 * dr.fmax(o_dot_h, mf.TINY)), 0.0)
         return q * pdf_cone + (1.0 - q) * pdf_rest
-
-    def describe(self) -> dict:
-        return {"specular_model": self.specular_model, **BRDF.describe(self)}

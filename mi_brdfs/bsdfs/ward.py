@@ -111,7 +111,7 @@ import drjit as dr
 import mitsuba as mi
 
 from . import energy, lambert, microfacet as mf
-from .base import BRDF, Param, Reader, mean
+from .base import BRDF, Option, Param, Reader, mean
 from .grid import Axis
 
 ALPHA_MIN = 1e-4      # smallest roughness used (0 is clamped here)
@@ -127,7 +127,7 @@ FORMULAS = ("vectors", "angles")
 # ----------------------------------------------------------------------------
 
 def _lobe_support(h, alpha_t, alpha_b):
-    """((h·t/a_t)² + (h·b/a_b)², (h·n)², valid) for an unnormalised h.
+    """((h·t/a_t)² + (h·b/a_b)², (h·n)², valid) for a unit half vector h.
 
     ``valid`` marks where exp(-ratio) is not 0 in float32; elsewhere the two
     terms are benign stand-ins (0 and 1), so that no 0/0 or overflow reaches
@@ -140,15 +140,16 @@ def _lobe_support(h, alpha_t, alpha_b):
 
 
 def _sqrt_cos_ratio(cos_i, cos_o):
-    """sqrt((d·n) / (w_r·n)) = 1 / sqrt((w_r·n) / (d·n)), 0 below the surface."""
+    """sqrt((d·n) / (w_r·n)) = 1 / sqrt((w_r·n) / (d·n)), 0 below the surface;
+    as sqrt(d·n) / sqrt(w_r·n), exact for cosines down to the smallest float."""
     ok = (cos_i > 0) & (cos_o > 0)
-    ratio = dr.select(ok, cos_o, 1.0) / dr.select(ok, dr.fmax(cos_i, TINY), 1.0)
-    return dr.select(ok, dr.sqrt(ratio), 0.0)
+    return dr.select(ok, dr.sqrt(dr.select(ok, cos_o, 1.0)) / dr.sqrt(dr.select(ok, cos_i, 1.0)),
+                     0.0)
 
 
 def specular_vectors(wi, wo, alpha_t, alpha_b):
     """The lecture's dot-product form of f_s / m_S (= the eval value, both modes)."""
-    h = wi + wo
+    h = mf.half_vector(wi, wo)        # the exponent is a ratio: any scale, but |wi + wo|² underflows
     num, hn2, valid = _lobe_support(h, alpha_t, alpha_b)
     e = dr.select(valid, dr.exp(-num / hn2), 0.0)
     norm = 4.0 * dr.pi * alpha_t * alpha_b
@@ -158,7 +159,7 @@ def specular_vectors(wi, wo, alpha_t, alpha_b):
 def specular_angles(wi, wo, alpha_t, alpha_b):
     """The lecture's angle form of f_s / m_S: tan delta, cos phi, sin phi."""
     cos_r, cos_i = mi.Frame3f.cos_theta(wi), mi.Frame3f.cos_theta(wo)
-    h = wi + wo
+    h = mf.half_vector(wi, wo)
     _, _, valid = _lobe_support(h, alpha_t, alpha_b)
     # delta and phi from h (stand-ins where the lobe is 0, and phi's stand-in
     # at h = n, where atan2(0, 0) has no derivative and tan delta = 0 anyway)
@@ -167,18 +168,16 @@ def specular_angles(wi, wo, alpha_t, alpha_b):
     hx = dr.select(tilted, h.x, 1.0)
     hy = dr.select(tilted, h.y, 0.0)
     hz = dr.select(valid, h.z, 1.0)
-    delta = dr.atan2(dr.sqrt(dr.square(hx) + dr.square(hy)), hz)
+    delta = dr.atan2(dr.safe_sqrt(dr.square(hx) + dr.square(hy)), hz)
     phi = dr.atan2(hy, hx)
     tan_delta = dr.tan(delta)
     sin_phi, cos_phi = dr.sincos(phi)
     a = dr.square(cos_phi / alpha_t) + dr.square(sin_phi / alpha_b)
     tan2_a = dr.select(tilted, dr.square(tan_delta) * a, 0.0)
     e = dr.select(valid, dr.exp(-tan2_a), 0.0)
-    ok = (cos_i > 0) & (cos_r > 0)
-    ci = dr.select(ok, dr.fmax(cos_i, TINY), 1.0)
-    cr = dr.select(ok, dr.fmax(cos_r, TINY), 1.0)
-    f = e / (4.0 * dr.pi * alpha_t * alpha_b * dr.sqrt(ci * cr)) * ci
-    return dr.select(ok, f, 0.0)
+    # / sqrt(cos θ_i cos θ_r) · cos θ_i, written sqrt(cos θ_i)/sqrt(cos θ_r) (no underflow)
+    f = e / (4.0 * dr.pi * alpha_t * alpha_b) * _sqrt_cos_ratio(cos_r, cos_i)
+    return f
 
 
 SPECULAR = {"vectors": specular_vectors, "angles": specular_angles}
@@ -248,6 +247,7 @@ ANISOTROPIC = energy.AlbedoSpec(
 class Ward(BRDF):
     name = "ward"
     compensable = True
+    OPTIONS = (Option("formula", "vectors", FORMULAS),)
     PARAMS = (
         Param("diffuse_reflectance", 0.5),                                    # m_D
         Param("specular_reflectance", 0.2),                                   # m_S
@@ -257,7 +257,6 @@ class Ward(BRDF):
     )
 
     def read(self, reader: Reader) -> None:
-        self.formula = reader.choice("formula", "vectors", FORMULAS)
         props = reader.props
         self.anisotropic = "alpha_u" in props or "alpha_v" in props
         if self.anisotropic and "alpha" in props:
@@ -323,6 +322,3 @@ class Ward(BRDF):
 
     def ms_colour(self, inp):
         return inp.m_s
-
-    def describe(self) -> dict:
-        return {"formula": self.formula, **BRDF.describe(self)}

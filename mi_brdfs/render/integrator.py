@@ -76,18 +76,21 @@ class Scanline:
         ray = mi.Ray3f(ray)
         si = scene.ray_intersect(ray, active)
         result = mi.Spectrum(0.0)
-        # Emitters seen directly (the environment where the ray misses).
-        if not self.hide_emitters:
-            result += si.emitter(scene).eval(si, active)
+        # Emitters seen directly (the environment where the ray misses). In
+        # scalar variants a missing emitter or BSDF is None, not a null pointer.
+        seen = si.emitter(scene)
+        if not self.hide_emitters and seen is not None:
+            result += seen.eval(si, active)
 
         hit = mi.Bool(active) & si.is_valid()
-        bsdf = si.bsdf(ray)
+        # (scalar variants: si.bsdf() of a missed ray dereferences no shape)
+        bsdf = si.bsdf(ray) if dr.is_jit_v(mi.Float) or hit else None
         ctx = mi.BSDFContext()
-        for emitter in scene.emitters():            # every light, unrolled at trace time
+        for emitter in scene.emitters() if bsdf is not None else ():   # every light
             ds, radiance = emitter.sample_direction(si, sampler.next_2d(hit), hit)
             lit = hit & (ds.pdf > 0)
             if self.shadows:
-                lit &= ~scene.ray_test(si.spawn_ray_to(ds.p), lit)
+                lit &= dr.select(scene.ray_test(si.spawn_ray_to(ds.p), lit), False, True)
             f_r = bsdf.eval(ctx, si, si.to_local(ds.d), lit)
             result += dr.select(lit, radiance * f_r, 0.0)
 

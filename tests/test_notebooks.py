@@ -1,6 +1,5 @@
 """Every notebook runs top to bottom (small sizes: MI_BRDFS_QUICK=1), and each
 committed .ipynb is its paired py:percent source, without outputs."""
-import os
 from pathlib import Path
 
 import jupytext

@@ -164,7 +164,6 @@ def _render(scene, spp: int, seed: int) -> np.ndarray:
 def timed(scene, spp: int, repeats: int) -> dict:
     """Warm-up render (compiles), then the median of `repeats` renders, with the
     kernel history's split of the last one: tracing, codegen, execution (s)."""
-    import drjit as dr
 
     start = time.perf_counter()
     _render(scene, spp, seed=0)

@@ -1,9 +1,11 @@
-"""lambert: hdr mode against Mitsuba's `diffuse`, scanline mode against the lecture."""
+"""lambert: hdr mode against Mitsuba's `diffuse`, scanline mode against the
+lecture, a coloured albedo. What every model shares: the battery."""
 import numpy as np
 import pytest
 
-from conftest import evaluate, random_hemisphere
 import mitsuba as mi
+
+from support import albedo, evaluate, random_hemisphere, rgb
 
 COLOUR = [0.8, 0.4, 0.1]
 
@@ -43,3 +45,11 @@ def test_zero_reflectance_has_no_lobe():
     assert bsdf.flags() == 0 and bsdf.component_count() == 0
     bsdf = mi.load_dict({"type": "lambert"})
     assert bsdf.flags() == mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide
+
+
+def test_albedo_is_the_reflectance():
+    """hdr: a coloured Lambert surface reflects its colour at every angle."""
+    colour = [0.8, 0.4, 0.1]
+    bsdf = mi.load_dict({"type": "lambert", "reflectance": rgb(colour)})
+    for th in (0, 45, 85):
+        np.testing.assert_allclose(albedo(bsdf, th), colour, rtol=0.01)

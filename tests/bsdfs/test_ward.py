@@ -1,20 +1,17 @@
-"""ward: against the lecture (NumPy), the two formulas, furnace, reciprocity,
-sampling (chi-square, sample/eval/pdf), extremes, errors and parameters."""
+"""ward: the lecture's two forms transcribed independently in NumPy, the
+plugin's two formulas against each other, the anisotropy's orientation, the
+white furnace against a NumPy quadrature, and the roughness given twice.
+What every model shares (sampling, extremes, gradients, errors): the battery."""
 import math
 import re
 
 import numpy as np
 import pytest
 
-from conftest import evaluate, random_hemisphere, surface, vec
 import drjit as dr
 import mitsuba as mi
 
-
-
-
-def rgb(c):
-    return {"type": "rgb", "value": list(map(float, c))}
+from support import evaluate, random_hemisphere, rgb
 
 
 # ----------------------------------------------------------------------------
@@ -324,219 +321,17 @@ def _crossing(alpha_t, alpha_b, az):
     return lo
 
 
-# ----------------------------------------------------------------------------
-#  4. Reciprocity of the hdr BRDF
-# ----------------------------------------------------------------------------
-
-@pytest.mark.parametrize("formula", ["vectors", "angles"])
-def test_reciprocity(rng, formula):
-    alpha_t, alpha_b = 0.08, 0.3
-    d, w = pairs(rng, 8192, alpha_t, alpha_b, min_cos=1e-3)
-    bsdf = load("hdr", alpha_t, alpha_b, formula)
-    v1, _ = evaluate(bsdf, wi=w, wo=d)
-    v2, _ = evaluate(bsdf, wi=d, wo=w)
-    f1, f2 = v1 / d[:, 2:3], v2 / w[:, 2:3]
-    np.testing.assert_allclose(f1, f2, rtol=1e-4, atol=1e-7)
-    assert np.count_nonzero(f1[:, 1] > 1) > 1000
-    # The scanline mode is not reciprocal (its clamp(d·n) is the light's only).
-    vs, _ = evaluate(load("scanline", alpha_t, alpha_b, formula), wi=w, wo=d)
-    assert not np.allclose(vs / d[:, 2:3], evaluate(load("scanline", alpha_t, alpha_b, formula),
-                                                     wi=d, wo=w)[0] / w[:, 2:3], rtol=1e-2)
-
-
-# ----------------------------------------------------------------------------
-#  5. Sampling: chi-square, and sample() against eval() and pdf()
-# ----------------------------------------------------------------------------
-
 RES, IRES, SAMPLES = 201, 16, 1_000_000
-WI_AZIMUTH = 30.0          # not along t or b: the anisotropic lobe is asymmetric
-
-
-def _chi2_cases():
-    cases = []
-    for alpha_t, alpha_b in [(0.1, 0.1), (0.05, 0.3), (0.3, 0.05), (0.5, 0.5), (0.05, 0.05)]:
-        for m_d in (0.0, 0.5):
-            for theta in (0, 30, 60, 85):
-                cases.append(({"type": "ward", "alpha_u": alpha_t, "alpha_v": alpha_b,
-                               "diffuse_reflectance": m_d}, theta))
-    cases.append(({"type": "ward", "alpha_u": 0.15, "alpha_v": 0.04, "mode": "scanline",
-                   "formula": "angles", "diffuse_reflectance": rgb([0.9, 0.2, 0.1]),
-                   "specular_reflectance": rgb([1.5, 0.5, 0.5])}, 45))
-    cases.append(({"type": "ward", "alpha": 0.2, "formula": "angles"}, 75))
-    return cases
-
-
-CHI2_CASES = _chi2_cases()
-CHI2_TEST_COUNT = len(CHI2_CASES) + 1          # + the negative control
-
-
-def _wi(theta_deg):
-    t, a = math.radians(theta_deg), math.radians(WI_AZIMUTH)
-    return mi.ScalarVector3f(math.sin(t) * math.cos(a), math.sin(t) * math.sin(a), math.cos(t))
-
-
-def _chi2(sample_params, pdf_params, theta):
-    sample_func, _ = mi.chi2.BSDFAdapter("ward", sample_params, wi=_wi(theta))
-    _, pdf_func = mi.chi2.BSDFAdapter("ward", pdf_params, wi=_wi(theta))
-    return mi.chi2.ChiSquareTest(domain=mi.chi2.SphericalDomain(), pdf_func=pdf_func,
-                                 sample_func=sample_func, sample_dim=3,
-                                 sample_count=SAMPLES, res=RES, ires=IRES)
-
-
-def _params_id(params):
-    return "-".join(f"{k}={v}" for k, v in params.items()
-                    if k != "type" and not isinstance(v, dict)) or "default"
-
-
-def _case_id(case):
-    params, theta = case
-    return f"{_params_id(params)}-theta={theta}"
-
-
-@pytest.mark.parametrize("case", CHI2_CASES, ids=[_case_id(c) for c in CHI2_CASES])
-def test_chi2(case, tmp_path, monkeypatch):
-    monkeypatch.chdir(tmp_path)          # a rejected test writes chi2_data.py
-    params, theta = case
-    chi2 = _chi2(params, params, theta)
-    ok = chi2.run(significance_level=0.01, test_count=CHI2_TEST_COUNT, quiet=True)
-    assert ok, f"chi-square rejected {params} at theta_i={theta} deg:\n{chi2.messages}"
-
-
-def test_chi2_detects_a_wrong_pdf(tmp_path, monkeypatch):
-    """Negative control: sampling alpha_v = 0.3 against the pdf of
-    alpha_v = 0.315 (5 %) must be rejected."""
-    monkeypatch.chdir(tmp_path)
-    base = {"type": "ward", "alpha_u": 0.05, "diffuse_reflectance": 0.0}
-    chi2 = _chi2({**base, "alpha_v": 0.3}, {**base, "alpha_v": 0.315}, 45)
-    assert not chi2.run(significance_level=0.01, test_count=CHI2_TEST_COUNT, quiet=True)
-
-
-CONSISTENCY = [
-    {"type": "ward"},
-    {"type": "ward", "alpha_u": 0.05, "alpha_v": 0.4, "diffuse_reflectance": 0.0},
-    {"type": "ward", "alpha_u": 1e-3, "alpha_v": 0.5, "formula": "angles"},
-    {"type": "ward", "alpha": 0.7, "diffuse_reflectance": 0.3, "specular_reflectance": 0.7},
-    {"type": "ward", "mode": "scanline", "alpha_u": 0.2, "alpha_v": 0.05,
-     "diffuse_reflectance": rgb([1.5, 0.3, 0.0]), "specular_reflectance": rgb([0.9, 0.9, 2.0])},
-]
-
-
-@pytest.mark.parametrize("params", CONSISTENCY, ids=_params_id)
-def test_sample_weight_times_pdf_is_eval(params):
-    n = 100_000
-    rng = np.random.default_rng(5)
-    wi = random_hemisphere(rng, n)
-    m = n // 8
-    t = np.radians(rng.uniform(80, 89.99, m))
-    p = rng.uniform(0, 2 * np.pi, m)
-    wi[:m] = np.column_stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)])
-    wi[m:2 * m, 2] *= -1                                       # viewers below
-    below = wi[:, 2] <= 0
-    bsdf = mi.load_dict(params)
-    ctx = mi.BSDFContext()
-    si = surface(wi)
-    bs, weight = bsdf.sample(ctx, si, mi.Float(rng.random(n)),
-                             mi.Point2f(rng.random(n), rng.random(n)))
-    value, pdf = (np.array(x) for x in bsdf.eval_pdf(ctx, si, bs.wo))
-    weight, value, bs_pdf, wo = np.array(weight).T, value.T, np.array(bs.pdf), np.array(bs.wo).T
-    assert np.all(np.isfinite(weight)) and np.all(np.isfinite(bs_pdf))
-    ok = bs_pdf > 0
-    assert np.count_nonzero(ok & ~below) > 0.5 * np.count_nonzero(~below)
-    assert not np.any(ok & below) and np.all(weight[~ok] == 0) and np.all(wo[ok, 2] > 0)
-    np.testing.assert_allclose(weight[ok] * bs_pdf[ok, None], value[ok], rtol=1e-4, atol=1e-6)
-    np.testing.assert_allclose(pdf[ok], bs_pdf[ok], rtol=1e-4, atol=0)
 
 
 # ----------------------------------------------------------------------------
-#  6. No NaN or Inf at the extremes
+#  4. Roughness given twice: a load-time error
 # ----------------------------------------------------------------------------
 
-def extreme_directions():
-    """(wi, wo): normal, grazing (cos 1e-6 and 0) along t, b and diagonally,
-    wi = wo, wi = -wo, mirrored below, every pair."""
-    dirs = [np.array([0.0, 0.0, 1.0]), np.array([0.6, 0.0, 0.8])]
-    for c in (1e-6, 0.0):
-        s = math.sqrt(1 - c * c)
-        dirs += [np.array([s, 0.0, c]), np.array([0.0, -s, c]),
-                 np.array([s / math.sqrt(2), s / math.sqrt(2), c])]
-    wi, wo = [], []
-    for a in dirs:
-        for b in dirs:
-            wi += [a, a, a, a]
-            wo += [b, a, -a, b * [1, 1, -1]]
-    return np.array(wi), np.array(wo)
-
-
-EXTREME_ALPHAS = [(1e-3, 0.5), (0.5, 1e-3), (0.0, 0.0), (1e-4, 1e-4), (1.0, 1.0), (0.2, 0.2)]
-EXTREME_CONFIGS = [
-    {"type": "ward", "alpha_u": at, "alpha_v": ab, "mode": mode, "formula": formula,
-     "diffuse_reflectance": m_d, "specular_reflectance": 1.0}
-    for at, ab in EXTREME_ALPHAS
-    for mode in ("hdr", "scanline")
-    for formula in ("vectors", "angles")
-    for m_d in (0.0, 0.5)
-]
-
-
-def finite(x):
-    return bool(np.all(np.isfinite(np.array(x))))
-
-
-@pytest.mark.parametrize("config", EXTREME_CONFIGS,
-                         ids=lambda c: "-".join(str(v) for k, v in c.items() if k != "type"))
-def test_no_nan_or_inf(config):
-    bsdf = mi.load_dict(config)
-    wi, wo = extreme_directions()
-    ctx = mi.BSDFContext()
-    value, pdf = bsdf.eval_pdf(ctx, surface(wi), vec(wo))
-    assert finite(value) and finite(pdf)
-    assert np.all(np.array(value) >= 0) and np.all(np.array(pdf) >= 0)
-    u = np.array([0.0, 1e-7, 0.25, 0.5, 1 - 1e-7])
-    s1, s2x, s2y = (a.ravel() for a in np.meshgrid(u, u, u))
-    si = surface(np.repeat(wi, len(s1), axis=0))
-    bs, weight = bsdf.sample(ctx, si, mi.Float(np.tile(s1, len(wi))),
-                             mi.Point2f(np.tile(s2x, len(wi)), np.tile(s2y, len(wi))))
-    assert finite(weight) and finite(bs.pdf) and finite(bs.wo)
-
-
-@pytest.mark.parametrize("formula", ["vectors", "angles"])
-@pytest.mark.parametrize("alpha_t, alpha_b", EXTREME_ALPHAS)
-def test_gradients_are_finite(formula, alpha_t, alpha_b):
-    """Parameter gradients and direction gradients (d eval / d wo, d wi)."""
-    bsdf = mi.load_dict({"type": "ward", "alpha_u": alpha_t, "alpha_v": alpha_b,
-                         "formula": formula})
-    params = mi.traverse(bsdf)
-    keys = ["alpha_u.value", "alpha_v.value", "diffuse_reflectance.value",
-            "specular_reflectance.value"]
-    for key in keys:
-        dr.enable_grad(params[key])
-    params.update()
-    wi, wo = extreme_directions()
-    si = surface(wi)
-    wo = vec(wo)
-    dr.enable_grad(si.wi, wo)
-    value, pdf = bsdf.eval_pdf(mi.BSDFContext(), si, wo)
-    dr.backward(dr.sum(value) + dr.sum(pdf))
-    for key in keys:
-        assert finite(dr.grad(params[key])), key
-    assert finite(dr.grad(wo)) and finite(dr.grad(si.wi))
-
-
-# ----------------------------------------------------------------------------
-#  7. Bad parameters: load-time errors naming plugin, parameter, value, range
-# ----------------------------------------------------------------------------
-
+# The exclusive roughness parameters (every parameter's range: the battery).
 ERRORS = [
-    ({"alpha": -0.1}, "alpha", "-0.1", "[0, inf]"),
-    ({"alpha_u": -1.0}, "alpha_u", "-1.0", "[0, inf]"),
-    ({"alpha_u": 0.1, "alpha_v": float("nan")}, "alpha_v", "nan", "[0, inf]"),
-    ({"alpha_v": {"type": "checkerboard", "color0": -0.5}}, "alpha_v", "-0.5", "[0, inf]"),
     ({"alpha": 0.2, "alpha_u": 0.1}, "alpha", "0.2", "either alpha or alpha_u/alpha_v, not both"),
     ({"alpha": 0.2, "alpha_v": 0.1}, "alpha", "0.2", "either alpha or alpha_u/alpha_v, not both"),
-    ({"formula": "angle"}, "formula", "'angle'", '"vectors", "angles"'),
-    ({"mode": "ldr"}, "mode", "'ldr'", '"scanline", "hdr"'),
-    ({"diffuse_reflectance": rgb([0.5, -0.5, 0.0])}, "diffuse_reflectance", "-0.5", "[0, inf]"),
-    ({"specular_reflectance": -2.0}, "specular_reflectance", "-2.0", "[0, inf]"),
 ]
 
 
@@ -548,92 +343,3 @@ def test_bad_parameter_is_a_load_time_error(extra, name, value, valid):
     last = str(info.value).strip().splitlines()[-1]
     assert re.search(rf"ward: parameter '{name}' = {re.escape(value)} is invalid", last), last
     assert valid in last, last
-
-
-@pytest.mark.parametrize("extra", [{"alpha": 0.0}, {"alpha_u": 0.0, "alpha_v": 3.0},
-                                   {"alpha_u": 0.2}, {"diffuse_reflectance": 2.0}])
-def test_edge_values_are_accepted(extra):
-    mi.load_dict({"type": "ward", **extra})
-
-
-# ----------------------------------------------------------------------------
-#  8. Parameters: traverse, update, AD against finite differences
-# ----------------------------------------------------------------------------
-
-COMMON = {"diffuse_reflectance.value", "specular_reflectance.value"}
-
-
-@pytest.mark.parametrize("extra, keys", [
-    ({}, COMMON | {"alpha.value"}),
-    ({"alpha": 0.3}, COMMON | {"alpha.value"}),
-    ({"alpha_u": 0.3}, COMMON | {"alpha_u.value", "alpha_v.value"}),
-    ({"alpha_u": 0.3, "alpha_v": 0.1}, COMMON | {"alpha_u.value", "alpha_v.value"}),
-])
-def test_traverse_lists_every_parameter_as_differentiable(extra, keys):
-    params = mi.traverse(mi.load_dict({"type": "ward", **extra}))
-    assert set(params.keys()) == keys
-    for key in params.keys():
-        assert not (params.flags(key) & mi.ParamFlags.NonDifferentiable), key
-
-
-def test_update_changes_the_result_without_reloading(rng):
-    wi, wo = random_hemisphere(rng, 256, 0.1), random_hemisphere(rng, 256, 0.1)
-    bsdf = mi.load_dict({"type": "ward", "alpha_u": 0.1, "alpha_v": 0.1})
-    before = evaluate(bsdf, wi, wo)[0]
-    params = mi.traverse(bsdf)
-    params["alpha_u.value"] = 0.4
-    params["specular_reflectance.value"] = 0.8
-    params.update()
-    after = evaluate(bsdf, wi, wo)[0]
-    fresh = evaluate(mi.load_dict({"type": "ward", "alpha_u": 0.4, "alpha_v": 0.1,
-                                   "specular_reflectance": 0.8}), wi, wo)[0]
-    assert not np.allclose(before, after)
-    np.testing.assert_allclose(after, fresh, rtol=1e-6)
-    # Isotropic: one "alpha" moves both axes.
-    iso = mi.load_dict({"type": "ward", "alpha": 0.1})
-    params = mi.traverse(iso)
-    params["alpha.value"] = 0.4
-    params.update()
-    fresh = evaluate(mi.load_dict({"type": "ward", "alpha_u": 0.4, "alpha_v": 0.4}), wi, wo)[0]
-    np.testing.assert_allclose(evaluate(iso, wi, wo)[0], fresh, rtol=1e-6)
-
-
-def test_update_of_specular_to_zero_keeps_the_lobe_traced():
-    """A colour changed through update() may change again: its lobe stays."""
-    bsdf = mi.load_dict({"type": "ward"})
-    flags = bsdf.flags()
-    params = mi.traverse(bsdf)
-    params["specular_reflectance.value"] = 0.0
-    params.update()
-    assert bsdf.flags() == flags
-
-
-FD_CONFIG = {"alpha_u": 0.15, "alpha_v": 0.3, "diffuse_reflectance": 0.5,
-             "specular_reflectance": 0.7}
-
-
-@pytest.mark.parametrize("key, config", [
-    *[(k, FD_CONFIG) for k in ("alpha_u.value", "alpha_v.value", "diffuse_reflectance.value",
-                               "specular_reflectance.value")],
-    ("alpha.value", {"alpha": 0.2}),
-])
-@pytest.mark.parametrize("formula", ["vectors", "angles"])
-def test_gradient_matches_finite_differences(rng, key, config, formula):
-    """d(sum of eval)/d(parameter) by AD equals a central finite difference."""
-    config = {"type": "ward", "formula": formula, **config}
-    wo, wi = pairs(rng, 1024, 0.2, 0.3, min_cos=0.1)
-    bsdf = mi.load_dict(config)
-    params = mi.traverse(bsdf)
-    dr.enable_grad(params[key])
-    params.update()
-    dr.backward(dr.sum(dr.sum(bsdf.eval(mi.BSDFContext(), surface(wi), vec(wo)))))
-    grad = float(dr.sum(dr.grad(params[key]))[0])
-    name, h = key.split(".")[0], 1e-3
-
-    def total(x):
-        return float(evaluate(mi.load_dict({**config, name: x}), wi, wo)[0]
-                     .astype(np.float64).sum())
-
-    fd = (total(config[name] + h) - total(config[name] - h)) / (2 * h)
-    assert abs(grad) > 1e-2
-    np.testing.assert_allclose(grad, fd, rtol=1e-2)

@@ -41,7 +41,7 @@ def test_furnace_flags(report):
     scan = furnace_row(r, "lambert", "scanline")
     assert scan["exceeds_1"] and scan["max"] == pytest.approx(3.1416, rel=0.01)   # no 1/pi
     phong = furnace_row(r, "phong", "scanline")               # m_S = 1, gamma = 1
-    assert phong["config"].startswith("m_D = 0, m_S = 1, gamma = 1") and phong["exceeds_1"]
+    assert phong["config"].startswith("m_D = 0, m_S = 1, γ = 1") and phong["exceeds_1"]
     assert not furnace_row(r, "phong", "hdr")["exceeds_1"]
     blinn_smith = next(f for f in r["furnace"] if f["model"] == "cook_torrance" and
                        f["config"].startswith("Blinn D, Smith") and f["mode"] == "hdr")

@@ -1,0 +1,567 @@
+"""The conformance battery: every registered plugin, in both modes, through the
+same checks, driven by its catalog entry (mi_brdfs/tools/catalog.py) and its
+parameter declarations (``PARAMS``, ``OPTIONS``):
+
+1. load, eval, pdf, sample: finite, non-negative, upwards, flags;
+2. χ² of the sampler against the pdf (Mitsuba's test), with one Šidák
+   correction over every χ² run of the suite, and a negative control per model;
+3. sample weight × pdf = eval, and pdf() = the pdf sample() reports;
+4. reciprocity (hdr) where the model declares it;
+5. the white furnace, by an independent quadrature: bounded, or 1 where the
+   model promises it (energy compensation);
+6. the numerical extremes: directions down to cos θ = 1e-30 and 0, parameter
+   extremes — values, pdfs, sample weights and gradients finite, non-negative;
+7. gradients against finite differences, for every parameter, and for colours
+   and weights also at their bounds (one-sided);
+8. bad values refused with one line (plugin, parameter, value, valid range) at
+   load time and at ``params.update()``; bad options too;
+9. traverse and update; a lobe is dropped only when it cannot matter.
+
+A model's own module keeps only its independent transcription of the lecture
+and what is particular to it.
+"""
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+import pytest
+
+import drjit as dr
+import mitsuba as mi
+
+import mi_brdfs
+from mi_brdfs.bsdfs.base import ParameterError
+from mi_brdfs.tools.catalog import ENTRIES
+from support import (CHI2_ALPHA, albedo, chi2_test, chi2_test_count, config_id, evaluate,
+                     finite, finite_difference, floats, points,
+                     f32, mirror_pairs, random_hemisphere, surface, vec)
+
+PLUGINS = {cls.name: cls for cls in mi_brdfs.PLUGINS}
+MODES = ("hdr", "scanline")
+
+
+def modes_of(config: dict) -> tuple[str, ...]:
+    """The modes a configuration runs in: its own, hdr only for compensated
+    ones (compensation belongs to hdr), else both."""
+    if "mode" in config:
+        return (config["mode"],)
+    return ("hdr",) if config.get("energy_compensation") else MODES
+
+
+def in_mode(config: dict, mode: str) -> dict:
+    return {**config, "mode": mode}
+
+
+def each_mode(configs) -> list:
+    """pytest params: every configuration in each of its modes."""
+    return [pytest.param(in_mode(c, m), id=config_id(in_mode(c, m)))
+            for c in configs for m in modes_of(c)]
+
+
+def wants_scanline(config: dict) -> dict:
+    """A configuration's colours scaled down for scanline mode (below the clamps)."""
+    out = dict(config)
+    for k, v in config.items():
+        if isinstance(v, float) and k.endswith(("reflectance", "shade")):
+            out[k] = 0.3 * v
+    return out
+
+
+# ----------------------------------------------------------------------------
+#  0. The catalog covers every plugin
+# ----------------------------------------------------------------------------
+
+@pytest.mark.parametrize("name", PLUGINS)
+def test_catalog_covers_the_plugin(name):
+    entry = ENTRIES[name]
+    chi2_modes = {m for c in entry.chi2 for m in modes_of(c.config)}
+    assert chi2_modes == set(MODES), f"{name}: χ² in {chi2_modes} only"
+    for part in ("consistency", "furnace", "extremes", "interior"):
+        assert getattr(entry, part), f"{name}: no {part} configurations"
+    if PLUGINS[name].compensable:
+        for part in ("consistency", "furnace", "extremes", "interior"):
+            configs = [getattr(c, "config", c) for c in getattr(entry, part)]
+            assert any(c.get("energy_compensation") for c in configs), \
+                f"{name}: no compensated {part} configuration"
+        assert any(c.config.get("energy_compensation") for c in entry.chi2)
+
+
+# ----------------------------------------------------------------------------
+#  1. Load, eval, pdf, sample
+# ----------------------------------------------------------------------------
+
+@pytest.mark.parametrize("config", each_mode([{"type": n} for n in PLUGINS]))
+def test_load_eval_pdf_sample(config, rng):
+    bsdf = mi.load_dict(config)
+    assert bsdf.flags() != 0 and bsdf.component_count() >= 1
+    assert type(bsdf).__name__ in str(bsdf) and f"mode={config['mode']}" in str(bsdf)
+    n = 4096
+    wi, wo = random_hemisphere(rng, n), random_hemisphere(rng, n)
+    value, pdf = evaluate(bsdf, wi, wo)
+    assert finite(value) and finite(pdf) and (value >= 0).all() and (pdf >= 0).all()
+    assert (value.max(axis=1) > 0).mean() > 0.5 and (pdf > 0).mean() > 0.5
+    bs, weight = bsdf.sample(mi.BSDFContext(), surface(wi), floats(rng.random(n)),
+                             points(rng.random(n), rng.random(n)))
+    ok = np.array(bs.pdf) > 0
+    assert finite(weight) and ok.mean() > 0.3 and (np.array(bs.wo)[2][ok] > 0).all()
+
+
+# ----------------------------------------------------------------------------
+#  2. χ²: one Šidák correction over every χ² run of the suite
+# ----------------------------------------------------------------------------
+
+CHI2_CASES = [pytest.param(c, theta, id=f"{config_id(c.config)}-theta={theta}")
+              for name in PLUGINS for c in ENTRIES[name].chi2 for theta in c.thetas]
+NEGATIVE = [pytest.param(name, id=name) for name in PLUGINS if ENTRIES[name].negative]
+CHI2_TEST_COUNT = chi2_test_count()      # every χ² run of the suite, the variants' included
+ALPHA = CHI2_ALPHA
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("case, theta", CHI2_CASES)
+def test_chi2(case, theta, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)          # a rejected test writes chi2_data.py
+    chi2 = chi2_test(case.config, case.config, theta, case.phi, res=case.res, ires=case.ires)
+    assert chi2.run(significance_level=ALPHA, test_count=CHI2_TEST_COUNT, quiet=True), \
+        chi2.messages
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", NEGATIVE)
+def test_chi2_detects_a_wrong_pdf(name, tmp_path, monkeypatch):
+    """Negative control: a sampler tested against the pdf of a slightly
+    different parameter must be rejected, or the χ² tests prove nothing."""
+    monkeypatch.chdir(tmp_path)
+    sampled, pdf, theta = ENTRIES[name].negative
+    chi2 = chi2_test(sampled, pdf, theta, ENTRIES[name].extra.get("negative_phi", 0.0))
+    assert not chi2.run(significance_level=ALPHA, test_count=CHI2_TEST_COUNT, quiet=True)
+
+
+# ----------------------------------------------------------------------------
+#  3. Sample weight x pdf = eval
+# ----------------------------------------------------------------------------
+
+def random_viewers(rng, n):
+    """Mostly upper-hemisphere viewers (1/8 near grazing, 80–89.99°), 1/8 below."""
+    wi = random_hemisphere(rng, n)
+    m = n // 8
+    t = np.radians(rng.uniform(80.0, 89.99, m))
+    p = rng.uniform(0, 2 * np.pi, m)
+    wi[:m] = np.column_stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)])
+    wi[m:2 * m, 2] *= -1
+    return f32(wi)
+
+
+@pytest.mark.parametrize("config", each_mode([c for e in ENTRIES.values() for c in e.consistency]))
+def test_sample_weight_matches_eval_over_pdf(config, rng):
+    n = 100_000
+    wi = random_viewers(rng, n)
+    below = wi[:, 2] <= 0
+    bsdf = mi.load_dict(config)
+    ctx = mi.BSDFContext()
+    si = surface(wi)
+    bs, weight = bsdf.sample(ctx, si, floats(rng.random(n)),
+                             points(rng.random(n), rng.random(n)))
+    value, pdf = bsdf.eval_pdf(ctx, si, bs.wo)
+    weight, value = np.array(weight).T, np.array(value).T
+    bs_pdf, pdf, wo = np.array(bs.pdf), np.array(pdf), np.array(bs.wo).T
+    for a in (weight, value, bs_pdf, pdf):
+        assert finite(a) and (a >= 0).all()
+    ok = bs_pdf > 0
+    # A real sampler: a usable direction for a good part of the upper viewers
+    # (toon's blinn cone over the whole hemisphere reflects ~2/3 below).
+    assert np.count_nonzero(ok & ~below) > 0.3 * np.count_nonzero(~below)
+    assert not np.any(ok & below) and np.all(weight[~ok] == 0) and np.all(wo[ok, 2] > 0)
+    np.testing.assert_allclose(weight[ok] * bs_pdf[ok, None], value[ok], rtol=1e-4, atol=1e-6)
+    np.testing.assert_allclose(pdf[ok], bs_pdf[ok], rtol=1e-4)
+    failed_up = ~ok & ~below              # only where there is no density
+    assert np.all((wo[failed_up, 2] <= 0) | (pdf[failed_up] == 0))
+
+
+# ----------------------------------------------------------------------------
+#  4. Reciprocity
+# ----------------------------------------------------------------------------
+
+RECIPROCAL = [pytest.param(c, id=config_id(c)) for n, cls in PLUGINS.items() if cls.reciprocal
+              for c in ENTRIES[n].interior + ENTRIES[n].reciprocity]
+
+
+@pytest.mark.parametrize("config", RECIPROCAL)
+def test_reciprocity(config, rng):
+    """hdr: eval(w_i, w_o)/cos θ_o = eval(w_o, w_i)/cos θ_i (the BRDF is symmetric)."""
+    wi, wo = mirror_pairs(rng, 4096, ENTRIES[config["type"]].lobe_width, min_cos=0.01)
+    bsdf = mi.load_dict(config)
+    forward = evaluate(bsdf, wi, wo)[0] / wo[:, 2:3]
+    backward = evaluate(bsdf, wo, wi)[0] / wi[:, 2:3]
+    rtol = 1e-3 if config.get("energy_compensation") else 1e-4
+    np.testing.assert_allclose(forward, backward, rtol=rtol, atol=1e-6 * forward.max())
+    assert forward.max() > 0.1
+
+
+# ----------------------------------------------------------------------------
+#  5. White furnace
+# ----------------------------------------------------------------------------
+
+FURNACE = [pytest.param(f, id=f"{n}-{f.label}") for n in PLUGINS for f in ENTRIES[n].furnace]
+
+
+@pytest.mark.parametrize("case", FURNACE)
+def test_white_furnace(case):
+    """E(θ_i) = ∫ eval dω_o by uniform-hemisphere quadrature (not the plugin's
+    sampler): within [lo, hi] at every listed angle (1 ± 1 % where energy is
+    preserved)."""
+    bsdf = mi.load_dict({**case.config, "mode": "hdr"})
+    values = {(th, ph): float(albedo(bsdf, th, ph, case.points).max())
+              for th in case.thetas for ph in case.phis}
+    text = ", ".join(f"{th}°/{ph}°: {e:.4f}" for (th, ph), e in values.items())
+    assert max(values.values()) <= case.hi + case.tol, f"albedo above {case.hi}: {text}"
+    assert min(values.values()) >= case.lo - case.tol, f"albedo below {case.lo}: {text}"
+
+
+@pytest.mark.parametrize("name", PLUGINS)
+def test_scanline_furnace_is_bounded(name):
+    """The scan-line lobes are clamped to [0, 1] per value, so a surface cannot
+    reflect more than 2π per lobe (the lecture's formulas carry no 1/π)."""
+    bsdf = mi.load_dict({"type": name, "mode": "scanline"})
+    lobes = bsdf.component_count()
+    for th in (0, 45, 85):
+        e = albedo(bsdf, th, n=256)
+        assert finite(e) and (e >= 0).all() and e.max() <= 2 * np.pi * lobes + 1e-3
+
+
+# ----------------------------------------------------------------------------
+#  6. The numerical extremes
+# ----------------------------------------------------------------------------
+
+GRAZING = (1e-6, 1e-10, 1e-12, 1e-19, 1e-30, 0.0)
+
+
+def extreme_viewers():
+    """The normal, oblique and grazing directions (cos θ in GRAZING) along t, b
+    and diagonally."""
+    dirs = [np.array([0.0, 0.0, 1.0]), np.array([0.6, 0.0, 0.8]),
+            np.array([0.0, math.sqrt(0.75), 0.5]), np.array([math.sqrt(1 - 0.81), 0.0, 0.9])]
+    for c in GRAZING:
+        s = math.sqrt(1 - c * c)
+        dirs += [np.array([s, 0.0, c]), np.array([0.0, -s, c]),
+                 np.array([s / math.sqrt(2), s / math.sqrt(2), c])]
+    return np.array(dirs)
+
+
+def extreme_directions():
+    """(wi, wo): each extreme direction against every other, itself, its mirror
+    (the highlight), its opposite, and mirrored below the surface."""
+    wi, wo = [], []
+    for a in extreme_viewers():
+        for b in extreme_viewers():
+            wi.append(a)
+            wo.append(b)
+        wi += [a, a, a]
+        wo += [a * [-1, -1, 1], -a, a * [1, 1, -1]]
+    return np.array(wi), np.array(wo)
+
+
+def differentiable_keys(params) -> list[str]:
+    return [k for k in params.keys()
+            if not (params.flags(k) & mi.ParamFlags.NonDifferentiable)
+            and dr.is_array_v(params[k]) and dr.is_float_v(params[k])]
+
+
+@pytest.mark.parametrize("config", each_mode([c for e in ENTRIES.values() for c in e.extremes]))
+def test_extremes(config):
+    bsdf = mi.load_dict(config)
+    params = mi.traverse(bsdf)
+    keys = differentiable_keys(params)
+    for key in keys:
+        dr.enable_grad(params[key])
+    params.update()
+    wi, wo = extreme_directions()
+    ctx = mi.BSDFContext()
+    value, pdf = bsdf.eval_pdf(ctx, surface(wi), vec(wo))
+    viewers = extreme_viewers()
+    u = np.array([0.0, 1e-7, 0.5, 1 - 1e-7, 1 - 2.0**-24])
+    s1, s2x, s2y = (a.ravel() for a in np.meshgrid(u, u, u))
+    si = surface(np.repeat(viewers, len(s1), axis=0))
+    n = len(viewers)
+    bs, weight = bsdf.sample(ctx, si, floats(np.tile(s1, n)),
+                             points(np.tile(s2x, n), np.tile(s2y, n)))
+    outputs = {"eval": value, "pdf": pdf, "weight": weight, "sample pdf": bs.pdf}
+    dr.eval(*outputs.values(), bs.wo)          # one launch, then plain copies
+    for what, a in outputs.items():
+        x = np.array(dr.detach(a))
+        assert finite(x), f"{what} not finite"
+        assert (x >= 0).all(), f"{what} negative"
+    assert finite(dr.detach(bs.wo))
+    dr.backward(dr.sum(dr.sum(value)) + dr.sum(pdf) + dr.sum(dr.sum(weight)) + dr.sum(bs.pdf))
+    grads = [dr.grad(params[key]) for key in keys]
+    dr.eval(*grads)
+    for key, grad in zip(keys, grads):
+        assert finite(grad), f"gradient of {key} not finite"
+
+
+# ----------------------------------------------------------------------------
+#  7. Gradients against finite differences
+# ----------------------------------------------------------------------------
+
+def present(config: dict) -> dict:
+    """{name: Param} of the parameters a configuration reads."""
+    return dict(mi.load_dict(config).params)
+
+
+def traverse_key(p) -> str:
+    return p.name if p.kind == "float" else p.name + ".value"
+
+
+def gradient_cases():
+    cases = []
+    for name in PLUGINS:
+        for config in ENTRIES[name].interior:
+            for mode in modes_of(config):
+                base = in_mode(config if mode == "hdr" else wants_scanline(config), mode)
+                for p in present(base).values():
+                    if not isinstance(base.get(p.name), float):
+                        continue                    # textures: not a single number
+                    points = [("interior", base[p.name])]
+                    if p.role in ("colour", "weight"):
+                        points += [("at 0" if p.lo == 0 else "at lo", p.lo),
+                                   ("at hi", p.probe_hi())]
+                    for where, x in points:
+                        cases.append(pytest.param(base, p, where, x,
+                                                  id=f"{config_id(base)}-{p.name}-{where}"))
+    return cases
+
+
+@pytest.mark.parametrize("config, p, where, x", gradient_cases())
+def test_gradient_matches_finite_differences(config, p, where, x, rng):
+    """AD of Σ eval with respect to one parameter (enabled and updated through
+    traverse, as an optimiser does) = a finite difference of fresh loads:
+    central inside the range, one-sided at a bound (where a lobe whose colour
+    or weight is 0 must still get its gradient)."""
+    wi, wo = mirror_pairs(rng, 1024, ENTRIES[config["type"]].lobe_width, min_cos=0.1)
+    config = {**config, p.name: x}
+    bsdf = mi.load_dict(config)
+    params = mi.traverse(bsdf)
+    key = traverse_key(p)
+    dr.enable_grad(params[key])
+    params.update()
+    dr.backward(dr.sum(dr.sum(bsdf.eval(mi.BSDFContext(), surface(wi), vec(wo)))))
+    grad = float(dr.sum(dr.ravel(dr.grad(params[key])))[0])
+    h = 1e-3 * max(1.0, abs(x))
+    side = {"at 0": "forward", "at lo": "forward", "at hi": "backward"}.get(where, "central")
+    fd = finite_difference(
+        lambda v: float(evaluate(mi.load_dict({**config, p.name: v}), wi, wo)[0].sum()),
+        x, h, side)
+    assert abs(fd) > 1e-3, f"the loss does not depend on {p.name} here (fd = {fd})"
+    np.testing.assert_allclose(grad, fd, rtol=2e-2)
+
+
+# ----------------------------------------------------------------------------
+#  8. Bad values and options: one line, at load time and at update()
+# ----------------------------------------------------------------------------
+
+def base_config(name: str, param: str) -> dict | None:
+    """A configuration of plugin ``name`` that reads ``param`` as a plain value."""
+    for config in [{"type": name}] + ENTRIES[name].interior:
+        config = {k: v for k, v in config.items() if k != "energy_compensation"}
+        if param in present(config):
+            return config
+    return None
+
+
+def bad_values(p) -> list[tuple[str, object, float]]:
+    """(label, value given, value reported) that lie outside p's range."""
+    out = []
+    if p.lo is not None:
+        bad = p.lo - 0.5 * max(1.0, abs(p.lo))
+        out.append(("below", bad, bad))
+    if p.hi is not None:
+        bad = p.hi + 0.5 * max(1.0, abs(p.hi))
+        out.append(("above", bad, bad))
+        out.append(("inf", math.inf, math.inf))
+    out.append(("nan", math.nan, math.nan))
+    if p.kind != "float" and p.lo is not None:
+        bad = p.lo - 0.5 * max(1.0, abs(p.lo))
+        ok = p.lo if p.hi is None else 0.5 * (p.lo + p.hi)
+        out.append(("texture", {"type": "checkerboard", "color0": ok, "color1": bad}, bad))
+    return out
+
+
+def bad_value_cases():
+    cases = []
+    for name, cls in PLUGINS.items():
+        for p in cls.PARAMS:
+            config = base_config(name, p.name)
+            if config is None:
+                continue
+            for label, value, shown in bad_values(p):
+                cases.append(pytest.param(config, p, value, shown,
+                                          id=f"{name}-{p.name}-{label}"))
+    return cases
+
+
+def assert_one_line(error: BaseException, plugin: str, name: str, shown, valid: str):
+    last = str(error).strip().splitlines()[-1]
+    assert re.search(rf"{plugin}: parameter '{name}' = {re.escape(repr(shown))} is invalid",
+                     last), last
+    assert valid in last, last
+
+
+@pytest.mark.parametrize("config, p, value, shown", bad_value_cases())
+def test_bad_value_is_refused_at_load(config, p, value, shown):
+    with pytest.raises(Exception) as info:
+        mi.load_dict({**config, p.name: value})
+    assert_one_line(info.value, config["type"], p.name, shown, p.valid())
+
+
+@pytest.mark.parametrize("config, p, value, shown",
+                         [c for c in bad_value_cases() if not isinstance(c.values[2], dict)])
+def test_bad_value_is_refused_at_update(config, p, value, shown):
+    """The same message at params.update() (issue 11): negative colours or an
+    exponent of -1 would render negative pixels or a silently dropped lobe."""
+    bsdf = mi.load_dict(config)
+    params = mi.traverse(bsdf)
+    params[traverse_key(p)] = value
+    with pytest.raises(ParameterError) as info:
+        params.update()
+    shown = float(np.float32(shown)) if math.isfinite(shown) else shown
+    assert_one_line(info.value, config["type"], p.name, shown, p.valid())
+
+
+OPTION_CASES = [pytest.param(name, o, id=f"{name}-{o.name}")
+                for name, cls in PLUGINS.items() for o in cls.options()]
+
+
+@pytest.mark.parametrize("name, option", OPTION_CASES)
+def test_bad_option_is_refused(name, option):
+    bad = "yes" if isinstance(option.default, bool) else "nonsense"
+    with pytest.raises(Exception) as info:
+        mi.load_dict({"type": name, option.name: bad})
+    last = str(info.value).strip().splitlines()[-1]
+    assert f"{name}: parameter '{option.name}' = {bad!r} is invalid" in last, last
+    assert option.valid() in last, last
+
+
+@pytest.mark.parametrize("name", [n for n, c in PLUGINS.items() if c.compensable])
+def test_energy_compensation_belongs_to_hdr(name):
+    with pytest.raises(Exception) as info:
+        mi.load_dict({"type": name, "mode": "scanline", "energy_compensation": True})
+    last = str(info.value).strip().splitlines()[-1]
+    assert f"{name}: parameter 'energy_compensation' = True is invalid" in last, last
+    assert 'mode="hdr"' in last
+
+
+def edge_cases():
+    """Every parameter at the ends of its range (colours also far above 1: the
+    scanline clamp limits them, as in the lecture)."""
+    cases = []
+    for name, cls in PLUGINS.items():
+        for p in cls.PARAMS:
+            config = base_config(name, p.name)
+            if config is None:
+                continue
+            values = {p.lo if p.lo is not None else -1e3, p.probe_hi()}
+            if p.role == "colour":
+                values.add(3.0)
+            for v in sorted(values):
+                cases.append(pytest.param({**config, p.name: v}, id=f"{name}-{p.name}={v:g}"))
+    return cases
+
+
+@pytest.mark.parametrize("config", edge_cases())
+def test_edge_values_are_accepted(config, rng):
+    bsdf = mi.load_dict(config)
+    wi, wo = random_hemisphere(rng, 256), random_hemisphere(rng, 256)
+    value, pdf = evaluate(bsdf, wi, wo)
+    assert finite(value) and finite(pdf) and (value >= 0).all() and (pdf >= 0).all()
+
+
+@pytest.mark.parametrize("name", PLUGINS)
+def test_unknown_parameter_is_refused(name):
+    with pytest.raises(Exception, match="unreferenced property.*\n.*colour"):
+        mi.load_dict({"type": name, "colour": 0.3})
+
+
+# ----------------------------------------------------------------------------
+#  9. traverse, update, and which lobes are traced
+# ----------------------------------------------------------------------------
+
+@pytest.mark.parametrize("config", [pytest.param(c, id=config_id(c)) for n in PLUGINS
+                                    for c in [{"type": n}] + ENTRIES[n].interior])
+def test_traverse_exposes_every_parameter_read(config):
+    bsdf = mi.load_dict(config)
+    params = mi.traverse(bsdf)
+    names = {k.split(".")[0] for k in params.keys()}
+    assert names == set(bsdf.params)
+    for key in params.keys():
+        if key.endswith(".to_uv"):          # a bitmap's own transform
+            continue
+        assert not (params.flags(key) & mi.ParamFlags.NonDifferentiable), key
+
+
+@pytest.mark.parametrize("config", [pytest.param(c, id=config_id(c)) for n in PLUGINS
+                                    for c in ENTRIES[n].interior])
+def test_update_matches_a_fresh_load(config, rng):
+    """Every parameter changed through traverse + update() gives the BSDF a
+    fresh load with those values gives."""
+    wi, wo = mirror_pairs(rng, 1024, ENTRIES[config["type"]].lobe_width, min_cos=0.05)
+    bsdf = mi.load_dict(config)
+    params = mi.traverse(bsdf)
+    changed = {}
+    for p in bsdf.params.values():
+        if isinstance(config.get(p.name), float):
+            lo = p.lo if p.lo is not None else -1.0
+            hi = p.probe_hi()
+            changed[p.name] = lo + 0.37 * (hi - lo)       # another valid value
+            params[traverse_key(p)] = changed[p.name]
+    params.update()
+    assert changed
+    fresh = mi.load_dict({**config, **changed})
+    for a, b in zip(evaluate(bsdf, wi, wo), evaluate(fresh, wi, wo)):
+        np.testing.assert_allclose(a, b, rtol=1e-5, atol=1e-7)
+
+
+def switch_cases():
+    """(plugin, parameter, value) that switch a lobe off at load time."""
+    cases = []
+    for name, cls in PLUGINS.items():
+        default = mi.load_dict({"type": name}).flags()
+        for p in cls.PARAMS:
+            if p.role not in ("colour", "weight") or p.name not in present({"type": name}):
+                continue
+            for value in {0.0, p.probe_hi()} if p.role == "weight" else {0.0}:
+                if mi.load_dict({"type": name, p.name: value}).flags() != default:
+                    cases.append(pytest.param(name, p, value, id=f"{name}-{p.name}={value}"))
+    return cases
+
+
+@pytest.mark.parametrize("name, p, value", switch_cases())
+def test_a_lobe_is_dropped_only_when_it_cannot_matter(name, p, value):
+    """Model only what a scene requires — but a parameter that is grad-enabled
+    or changed through update() keeps its lobe traced (issue 11)."""
+    default = mi.load_dict({"type": name}).flags()
+    assert mi.load_dict({"type": name, p.name: value}).flags() != default   # dropped
+    key = traverse_key(p)
+    # grad-enabled: the lobe comes back, so an optimiser can leave the bound
+    bsdf = mi.load_dict({"type": name, p.name: value})
+    params = mi.traverse(bsdf)
+    dr.enable_grad(params[key])
+    params.update()
+    assert bsdf.flags() == default
+    # changed through update() to the switching value: the lobe stays
+    bsdf = mi.load_dict({"type": name})
+    params = mi.traverse(bsdf)
+    params[key] = value
+    params.update()
+    assert bsdf.flags() == default
+    # a texture (not a constant) keeps its lobe
+    if p.kind != "float":
+        tex = {"type": "checkerboard", "color0": value, "color1": value}
+        assert mi.load_dict({"type": name, p.name: tex}).flags() == default
+
+
+def test_switches_exist():
+    """The lobe-switch test above has cases for every model with two lobes."""
+    names = {c.values[0] for c in switch_cases()}
+    assert {"lambert", "phong", "blinn", "ward", "cook_torrance", "toon", "oren_nayar"} <= names

@@ -101,26 +101,49 @@ from .grid import Axis
 #  The formulas (local directions: wi = w_r the viewer, wo = d the light)
 # ----------------------------------------------------------------------------
 
-def specular(wi, wo, alpha, f0, distribution: str, geometry: str):
-    """D·F·G / (4 (w_r·n)): the specular lobe's eval value, the same in both modes.
+def lobe(wi, wo, alpha, distribution: str, f0=None, geometry: str = "smith",
+         visible: bool = True, value: bool = True, pdf: bool = True):
+    """(specular value, sampling density) at wo, either None when not asked
+    for; the two share the half vector, D and G1(w_r)/cos θ_r.
 
-    (The lecture's scanline f_specular is m_S·D F G / (4 clamp(w_r·n)); the hdr
-    BRDF m_S·D F G / (4 (w_r·n)(d·n)) times Mitsuba's cos(theta_o) is the same.)
-    Smith: D F G1(d) · G1(w_r)/(4 w_r·n), with G1/cos computed without a
-    division by the cosine (-> 0 at grazing). V-cavity: its own 1/(4 w_r·n)
-    growth at a grazing mirror pair, stopped at cos = ``COS_FLOOR`` (1e-12).
+    The value is D·F·G / (4 (w_r·n)), the same in both modes (the lecture's
+    scanline f_specular is m_S·D F G / (4 clamp(w_r·n)); the hdr BRDF
+    m_S·D F G / (4 (w_r·n)(d·n)) times Mitsuba's cos θ_o is the same). Smith:
+    D F G1(d) · G1(w_r)/(4 w_r·n), with G1/cos computed without a division by
+    the cosine (-> 0 at grazing). V-cavity: its own 1/(4 w_r·n) growth at a
+    grazing mirror pair, stopped at cos = ``COS_FLOOR`` (1e-12).
+
+    The density is that of :func:`sample_lobe`: pdf(m) / (4 wo·m), m the half
+    vector, pdf(m) the visible normals' G1(w_r)/cos θ_r · max(0, w_r·m) D(m)
+    or the full distribution's D(m) cos θ_m.
     """
-    cos_i, cos_o = mi.Frame3f.cos_theta(wi), mi.Frame3f.cos_theta(wo)
     h = mf.half_vector(wi, wo)
     d = mf.D[distribution](h, alpha)
-    f = mf.fresnel_schlick(f0, dr.dot(wi, h))
-    if geometry == "smith":
-        g_over_4cos = mf.g1(distribution, wo, alpha) \
-            * mf.G1_OVER_COS[distribution](wi, alpha) * 0.25
-    else:
-        g = mf.g_cook_torrance(mi.Frame3f.cos_theta(h), cos_i, cos_o, dr.dot(wi, h))
-        g_over_4cos = g / (4.0 * dr.fmax(cos_i, mf.COS_FLOOR))
-    return d * f * g_over_4cos
+    visible = visible and distribution != "blinn"
+    g1_i = mf.G1_OVER_COS[distribution](wi, alpha) \
+        if (value and geometry == "smith") or (pdf and visible) else None
+    f = p = None
+    if value:
+        fresnel = mf.fresnel_schlick(f0, dr.dot(wi, h))
+        if geometry == "smith":
+            g_over_4cos = mf.g1(distribution, wo, alpha) * g1_i * 0.25
+        else:
+            cos_i = mi.Frame3f.cos_theta(wi)
+            g = mf.g_cook_torrance(mi.Frame3f.cos_theta(h), cos_i,
+                                   mi.Frame3f.cos_theta(wo), dr.dot(wi, h))
+            g_over_4cos = g / (4.0 * dr.fmax(cos_i, mf.COS_FLOOR))
+        f = d * fresnel * g_over_4cos
+    if pdf:
+        o_dot_h = dr.dot(wo, h)
+        pdf_m = d * (g1_i * dr.fmax(dr.dot(wi, h), 0.0) if visible else dr.fmax(h.z, 0.0))
+        jacobian = 1.0 / (4.0 * dr.select(o_dot_h > 0, o_dot_h, 1.0))      # dm/dwo
+        p = dr.select(o_dot_h > 0, pdf_m * jacobian, 0.0)
+    return f, p
+
+
+def specular(wi, wo, alpha, f0, distribution: str, geometry: str):
+    """D·F·G / (4 (w_r·n)): the specular lobe's eval value (see :func:`lobe`)."""
+    return lobe(wi, wo, alpha, distribution, f0, geometry, pdf=False)[0]
 
 
 def sample_lobe(wi, sample2, alpha, distribution: str, visible: bool = True):
@@ -135,15 +158,8 @@ def sample_lobe(wi, sample2, alpha, distribution: str, visible: bool = True):
 
 
 def pdf_lobe(wi, wo, alpha, distribution: str, visible: bool = True):
-    """Density of sample_lobe() at wo: pdf(m) / (4 wo·m), m the half vector."""
-    h = mf.half_vector(wi, wo)
-    o_dot_h = dr.dot(wo, h)
-    if visible and distribution != "blinn":
-        pdf_m = mf.pdf_visible(distribution, wi, h, alpha)
-    else:
-        pdf_m = mf.pdf_full(distribution, h, alpha)
-    jacobian = 1.0 / (4.0 * dr.select(o_dot_h > 0, o_dot_h, 1.0))      # dm/dwo
-    return dr.select(o_dot_h > 0, pdf_m * jacobian, 0.0)
+    """Density of sample_lobe() at wo (see :func:`lobe`)."""
+    return lobe(wi, wo, alpha, distribution, visible=visible, value=False)[1]
 
 
 # ----------------------------------------------------------------------------
@@ -227,6 +243,11 @@ class CookTorrance(BRDF):
 
     def pdf_specular(self, inp, si, wo):
         return pdf_lobe(si.wi, wo, inp.alpha, self.distribution, self.sample_visible)
+
+    def f_pdf_specular(self, inp, si, wo):
+        f, p = lobe(si.wi, wo, inp.alpha, self.distribution, self.m_f0, self.geometry,
+                    self.sample_visible)
+        return inp.m_s * f, p
 
     # --- energy compensation ----------------------------------------------------
     def table(self) -> energy.AlbedoTable:

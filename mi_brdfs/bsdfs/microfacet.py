@@ -244,8 +244,9 @@ def g_smith(distribution, wi, wo, alpha):
 # by Dupuy & Benyoub's spherical caps (2023, "Sampling visible GGX normals with
 # spherical caps"); Beckmann by Mitsuba's MicrofacetDistribution (Jakob's
 # inversion of the visible-slope cdf). The density is ours for both: with the
-# exact, scale-safe G1/cos above, so sampler and pdf agree at any angle.
-# The full distribution: m with density D(m) cos θ_m; Blinn always.
+# exact, scale-safe G1/cos above, so sampler and pdf agree at any angle
+# (cook_torrance.lobe()). The full distribution: m with density D(m) cos θ_m;
+# Blinn always.
 
 def _normalize(v):
     """v / |v| for a vector whose largest component is not tiny (|v| >= ~1e-19)."""
@@ -281,25 +282,12 @@ def sample_full(distribution: str, sample2, alpha):
     return mi.Vector3f(c * sin_t, s * sin_t, cos_t)
 
 
-def pdf_full(distribution: str, m, alpha):
-    """Density of sample_full() over microfacet normals: D(m) cos θ_m."""
-    if distribution == "blinn":
-        return pdf_blinn(m, alpha)
-    return D[distribution](m, alpha) * dr.fmax(m.z, 0.0)
-
-
 def sample_visible(distribution: str, wi, sample2, alpha):
     """A visible normal of GGX or Beckmann for the viewer wi."""
     if distribution == "ggx":
         return sample_ggx_visible(wi, sample2, alpha)
     m, _ = mi.MicrofacetDistribution(mi.MicrofacetType.Beckmann, alpha, True).sample(wi, sample2)
     return m
-
-
-def pdf_visible(distribution: str, wi, m, alpha):
-    """D_wi(m) = G1(wi)/cos θ_i · max(0, wi·m) D(m), without dividing by cos θ_i."""
-    return G1_OVER_COS[distribution](wi, alpha) * dr.fmax(dr.dot(wi, m), 0.0) \
-        * D[distribution](m, alpha)
 
 
 # ----------------------------------------------------------------------------
@@ -310,9 +298,3 @@ def sample_blinn(sample2, alpha):
     """A microfacet normal with density D_blinn(m) cos(theta_m), which is the
     power-cosine lobe of exponent 2/rho² - 1 about the normal."""
     return powercos.sample(sample2, 2.0 / dr.square(alpha) - 1.0)
-
-
-def pdf_blinn(m, alpha):
-    """Density of sample_blinn() over microfacet normals."""
-    cos_t, versin = powercos.cos_versin_z(m)
-    return powercos.pdf(cos_t, versin, 2.0 / dr.square(alpha) - 1.0)

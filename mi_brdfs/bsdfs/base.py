@@ -523,19 +523,13 @@ class BRDF:
                 wo = dr.select(pick_d, mi.warp.square_to_uniform_hemisphere(sample2), wo)
             if use.specular:
                 wo = dr.select(pick_s, self.sample_specular(inp, si, sample2), wo)
-            # A sampler may fail at a corner of its domain (Mitsuba's Beckmann
-            # visible normals at u = (0, 0)): that sample is discarded, and
-            # evaluated on a benign stand-in (no NaN in the other lanes' derivatives).
-            valid = dr.isfinite(wo.x + wo.y + wo.z)
-            wo = dr.select(valid, wo, mi.Vector3f(0.0, 0.0, 1.0))
-            active &= valid
 
         # The sampled direction is a fixed point for the derivatives (as Mitsuba's
         # differentiable integrators treat it): the weight's gradient is that of
         # eval/pdf there, not of the sampler's warping.
         wo = dr.detach(wo)
         value, pdf = self.lobes(use, probs, inp, si, wo, active)
-        active &= (pdf > 0) & (mi.Frame3f.cos_theta(wo) > HORIZON)
+        active &= (pdf > 0) & (mi.Frame3f.cos_theta(wo) > HORIZON)    # (a failed sample: pdf 0)
         # A weight beyond WEIGHT_MAX is no sample of the model but float32 failing
         # it: a near-mirror lobe at a grazing viewer (alpha 1e-4, cos 1e-30) puts
         # wo = reflect(wi, m) so close to -wi that wi + wo no longer holds m, and

@@ -287,7 +287,11 @@ def sample_visible(distribution: str, wi, sample2, alpha):
     if distribution == "ggx":
         return sample_ggx_visible(wi, sample2, alpha)
     m, _ = mi.MicrofacetDistribution(mi.MicrofacetType.Beckmann, alpha, True).sample(wi, sample2)
-    return m
+    # Mitsuba's Beckmann sampler fails at a corner of its domain (NaN for
+    # u = (0, 0) at normal incidence): the zero vector instead, whose
+    # "reflection" -wi is below the horizon (a discarded sample), and no NaN
+    # in the other lanes' derivatives.
+    return dr.select(dr.isfinite(m.x + m.y + m.z), m, 0.0)
 
 
 # ----------------------------------------------------------------------------

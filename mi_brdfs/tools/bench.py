@@ -30,8 +30,8 @@ lobes        model only what the scene requires: a plugin with a lobe switched
 materials    N spheres, each with its own material (N up to 200; path depth 3,
              constant environment), plugin vs built-in (cook_torrance vs
              roughconductor, lambert vs diffuse): first and warm render split
-             into tracing, code generation and kernel execution, and peak
-             memory; each (kind, N) in processes of its own (``rounds`` of
+             into tracing, code generation and kernel execution, a frozen
+             render's replay (render/frozen.py), and peak memory; each (kind, N) in processes of its own (``rounds`` of
              them, alternating kinds; medians). The first render loads its
              kernels from Dr.Jit's disk cache when an earlier run compiled them.
 frozen       render_passes at the largest N in 1, 8 and 32 passes (the same
@@ -472,7 +472,9 @@ def peak_mib() -> float:
 
 def worker_materials(kind: str, n: int, res: int, spp: int, repeats: int) -> dict:
     """First render of the spheres scene and the medians of ``repeats`` warm
-    renders, each split into tracing, code generation and kernel execution (s)."""
+    renders, each split into tracing, code generation and kernel execution (s),
+    and the median of ``repeats`` replays of a frozen render."""
+    import drjit as dr
     import mitsuba as mi
     start = time.perf_counter()
     # parallel=False as in the CLI: Python plugins loaded in worker threads failed
@@ -484,6 +486,16 @@ def worker_materials(kind: str, n: int, res: int, spp: int, repeats: int) -> dic
     for part in ("wall", "tracing", "codegen", "execution"):
         result[f"first_{part}_s"] = first[f"{part}_s"]
         result[f"{part}_s"] = statistics.median(m[f"{part}_s"] for m in warm)
+    # The same renders through a frozen function (as render passes and
+    # GradientStep do): recorded once, then replayed without tracing.
+    from ..render.frozen import FrozenRender
+    frozen = FrozenRender()
+    evaluated = lambda image: (dr.eval(image), dr.sync_thread())
+    measured(lambda: evaluated(frozen(scene, spp, seed=0)))    # (Jit flags key the recording)
+    replays = [measured(lambda: evaluated(frozen(scene, spp, seed=r + 1)))
+               for r in range(repeats)]
+    result["frozen_s"] = statistics.median(m["wall_s"] for m in replays)
+    result["frozen_recordings"] = frozen.recordings
     return result
 
 
@@ -508,7 +520,8 @@ def worker_passes(n: int, res: int, spp: int, passes: int, freeze: bool, repeats
 MATERIALS_COLUMNS = {     # column: the worker's figure
     "first_s": "first_wall_s", "first_tracing_s": "first_tracing_s",
     "first_codegen_s": "first_codegen_s", "warm_s": "wall_s", "tracing_s": "tracing_s",
-    "codegen_s": "codegen_s", "execution_s": "execution_s", "peak_mib": "peak_mib"}
+    "codegen_s": "codegen_s", "execution_s": "execution_s", "frozen_s": "frozen_s",
+    "frozen_recordings": "frozen_recordings", "peak_mib": "peak_mib"}
 
 
 def group_materials(s: Settings, refs) -> list[dict]:
@@ -530,6 +543,7 @@ def group_materials(s: Settings, refs) -> list[dict]:
             row["first_ratio"] = row["plugin_first_s"] / row["builtin_first_s"]
             row["warm_ratio"] = row["plugin_warm_s"] / row["builtin_warm_s"]
             row["execution_ratio"] = row["plugin_execution_s"] / row["builtin_execution_s"]
+            row["frozen_ratio"] = row["plugin_frozen_s"] / row["builtin_frozen_s"]
             row["memory_ratio"] = row["plugin_peak_mib"] / row["builtin_peak_mib"]
             rows.append(row)
     return rows
@@ -886,7 +900,8 @@ def materials_finding(rows: list[dict]) -> str:
     most = max(r["materials"] for r in rows)
     ratios = ", ".join(
         f"{r['name'].split(' vs ')[0]} {r['warm_ratio']:.2f}x (first render "
-        f"{r['first_ratio']:.2f}x, kernel execution {r['execution_ratio']:.2f}x, peak memory "
+        f"{r['first_ratio']:.2f}x, kernel execution {r['execution_ratio']:.2f}x, frozen replay "
+        f"{r['frozen_ratio']:.2f}x, peak memory "
         f"{r['plugin_peak_mib']:.0f} vs {r['builtin_peak_mib']:.0f} MiB)"
         for r in rows if r["materials"] == most)
     slopes = []
@@ -1031,6 +1046,8 @@ def plots(out_dir: str, results: dict) -> dict[str, list[str]]:
                 ax.plot(n, [r[f"{side}_warm_s"] for r in rows], style, label=f"{side} warm")
                 ax.plot(n, [r[f"{side}_tracing_s"] for r in rows], style, alpha=0.5,
                         label=f"{side} tracing")
+                ax.plot(n, [r[f"{side}_frozen_s"] for r in rows], style, alpha=0.25,
+                        label=f"{side} frozen replay")
             ax.set_xlabel("materials")
             ax.set_ylabel("seconds")
             ax.set_title(name, fontsize=8)

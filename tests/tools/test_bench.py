@@ -120,6 +120,8 @@ def test_materials_each_kind_and_count_in_its_own_process(results):
             assert row[f"{side}_peak_mib"] > 10                     # measured by the child
             assert row[f"{side}_first_s"] >= row[f"{side}_first_codegen_s"] > 0
             assert row[f"{side}_execution_s"] > 0
+            assert row[f"{side}_frozen_s"] > 0
+            assert row[f"{side}_frozen_recordings"] == 1             # then replayed
 
 
 def test_frozen_passes_replay(results):

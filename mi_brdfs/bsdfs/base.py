@@ -45,8 +45,9 @@ A model subclasses :class:`BRDF` and supplies:
     estimates of each lobe's albedo (weights included), for lobe selection;
 ``sample_specular(inp, si, sample2)``, ``pdf_specular(inp, si, wo)``
     the glossy lobe's sampler and its density;
-and, if ``compensable``: ``albedo(inp, v)``, ``albedo_average(inp)`` and
-``ms_colour(inp)`` for :mod:`.energy`.
+and, if ``compensable``: ``ms_colour(inp)`` and either ``albedo_spec()`` and
+``table_parameters(inp)`` (a tabulated albedo, :mod:`.energy`) or
+``albedo(inp, v)`` and ``albedo_average(inp)`` (an analytic one).
 """
 from __future__ import annotations
 
@@ -415,14 +416,23 @@ class BRDF:
         """(f_specular, pdf_specular) at once; a model may share their work."""
         return self.f_specular(inp, si, wo), self.pdf_specular(inp, si, wo)
 
+    def albedo_spec(self) -> energy.AlbedoSpec | None:
+        """The :class:`.energy.AlbedoSpec` whose table holds this instance's
+        single-scattering albedo (None: a model with an analytic one)."""
+        return None
+
+    def table_parameters(self, inp) -> tuple:
+        """The model parameters of that table's axes, evaluated (``inp``)."""
+        raise NotImplementedError
+
     def albedo(self, inp, v):
         """Single-scattering directional albedo of the compensated lobe per unit
         colour, at direction v (local), for :mod:`.energy`."""
-        raise NotImplementedError
+        return energy.table(self.albedo_spec())(v, *self.table_parameters(inp))
 
     def albedo_average(self, inp):
         """Its cosine-weighted hemispherical average."""
-        raise NotImplementedError
+        return energy.table(self.albedo_spec()).average(*self.table_parameters(inp))
 
     def ms_colour(self, inp):
         """The per-bounce colour of the compensated lobe (see :func:`.energy.ms_colour`)."""

@@ -170,7 +170,7 @@ def pdf_lobe(wi, wo, alpha, distribution: str, visible: bool = True):
 ALBEDO_AXES = (Axis("mu", 0.0, 1.0, 33, "sqrt"), Axis("alpha", 0.0, 1.0, 33, "sqrt"))
 
 
-def albedo_spec(distribution: str, geometry: str) -> energy.AlbedoSpec:
+def spec(distribution: str, geometry: str) -> energy.AlbedoSpec:
     alpha = lambda a: dr.fmax(a, mf.ALPHA_MIN)
     return energy.AlbedoSpec(
         f"cook_torrance/{distribution}/{geometry}", ALBEDO_AXES,
@@ -201,7 +201,7 @@ class CookTorrance(BRDF):
 
     @classmethod
     def albedo_specs(cls) -> list[energy.AlbedoSpec]:
-        return [albedo_spec(d, g) for d in mf.DISTRIBUTIONS for g in mf.GEOMETRIES]
+        return [spec(d, g) for d in mf.DISTRIBUTIONS for g in mf.GEOMETRIES]
 
     # --- lobes ---------------------------------------------------------------
     def has_diffuse(self) -> bool:
@@ -250,14 +250,11 @@ class CookTorrance(BRDF):
         return inp.m_s * f, p
 
     # --- energy compensation ----------------------------------------------------
-    def table(self) -> energy.AlbedoTable:
-        return energy.table(albedo_spec(self.distribution, self.geometry))
+    def albedo_spec(self) -> energy.AlbedoSpec:
+        return spec(self.distribution, self.geometry)
 
-    def albedo(self, inp, v):
-        return self.table()(v, inp.alpha)
-
-    def albedo_average(self, inp):
-        return self.table().average(inp.alpha)
+    def table_parameters(self, inp):
+        return (inp.alpha,)
 
     def ms_colour(self, inp):
         return inp.m_s * mf.fresnel_average(self.m_f0)

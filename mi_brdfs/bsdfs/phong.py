@@ -197,14 +197,11 @@ class Phong(BRDF):
         return self.pdf_lobe(si.wi, wo, inp.gamma)
 
     # --- energy compensation ----------------------------------------------------
-    def table(self) -> energy.AlbedoTable:
-        return energy.table(self.albedo_specs()[0])
+    def albedo_spec(self) -> energy.AlbedoSpec:
+        return self.albedo_specs()[0]
 
-    def albedo(self, inp, v):
-        return self.table()(v, inp.gamma)
-
-    def albedo_average(self, inp):
-        return self.table().average(inp.gamma)
+    def table_parameters(self, inp):
+        return (inp.gamma,)
 
     def ms_colour(self, inp):
         return inp.m_s

@@ -310,15 +310,11 @@ class Ward(BRDF):
         return pdf_specular(si.wi, wo, inp.alpha_t, inp.alpha_b)
 
     # --- energy compensation ----------------------------------------------------
-    def albedo(self, inp, v):
-        if self.anisotropic:
-            return energy.table(ANISOTROPIC)(v, inp.alpha_t, inp.alpha_b)
-        return energy.table(ISOTROPIC)(v, inp.alpha_t)
+    def albedo_spec(self) -> energy.AlbedoSpec:
+        return ANISOTROPIC if self.anisotropic else ISOTROPIC
 
-    def albedo_average(self, inp):
-        if self.anisotropic:
-            return energy.table(ANISOTROPIC).average(inp.alpha_t, inp.alpha_b)
-        return energy.table(ISOTROPIC).average(inp.alpha_t)
+    def table_parameters(self, inp):
+        return (inp.alpha_t, inp.alpha_b) if self.anisotropic else (inp.alpha_t,)
 
     def ms_colour(self, inp):
         return inp.m_s

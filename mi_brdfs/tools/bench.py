@@ -27,6 +27,10 @@ convergence  error vs spp (log-log) and its slope (about -1 for relMSE).
 scaling      render time vs resolution and vs number of lights (scan-line).
 lobes        model only what the scene requires: a plugin with a lobe switched
              off renders at the cost of the model without that lobe.
+energy       energy compensation: render time of each compensated model with
+             energy_compensation on vs off (same scene and spp), and the time
+             to build its albedo table (python -m mi_brdfs.tools.tables) at
+             the shipped resolution.
 materials    N spheres, each with its own material (N up to 200; path depth 3,
              constant environment), plugin vs built-in (cook_torrance vs
              roughconductor, lambert vs diffuse): first and warm render split
@@ -61,7 +65,7 @@ from dataclasses import dataclass
 import numpy as np
 
 GROUPS = ("builtin", "models", "oren_nayar", "sampling", "integrators", "convergence", "scaling",
-          "lobes", "materials", "frozen", "kernels", "tracing")
+          "lobes", "energy", "materials", "frozen", "kernels", "tracing")
 
 
 @dataclass
@@ -81,17 +85,18 @@ class Settings:
     frozen_passes: tuple[int, ...]
     rounds: int                       # processes per (kind, N) in materials
     kernel_lanes: int                 # direction pairs per BSDF kernel (kernels)
+    table_samples: int                # quadrature samples per axis of a table build (energy)
 
 
 QUICK = Settings(res=24, spp=4, repeats=3, ref_spp=64, spp_ladder=(1, 2, 4, 8),
                  resolutions=(16, 32), light_counts=(1, 2, 4), table_resolutions=(8, 32),
                  materials=(1, 3), materials_res=16, materials_spp=4, frozen_passes=(1, 2, 4),
-                 rounds=1, kernel_lanes=2**14)
+                 rounds=1, kernel_lanes=2**14, table_samples=8)
 FULL = Settings(res=192, spp=16, repeats=7, ref_spp=4096, spp_ladder=(1, 2, 4, 8, 16, 32, 64, 128),
                 resolutions=(64, 128, 256, 512), light_counts=(1, 2, 4, 8, 16, 32),
                 table_resolutions=(4, 8, 16, 32, 64, 128, 256),
                 materials=(1, 10, 50, 200), materials_res=128, materials_spp=64,
-                frozen_passes=(1, 8, 32), rounds=3, kernel_lanes=2**22)
+                frozen_passes=(1, 8, 32), rounds=3, kernel_lanes=2**22, table_samples=128)
 
 
 def efficiency(relmse: float, seconds: float) -> float:
@@ -400,6 +405,44 @@ def group_lobes(s: Settings, refs) -> list[dict]:
                      "ratio": t_off["median_s"] / t_ref["median_s"],
                      "diffuse_lobe": bool(flags & mi.BSDFFlags.Diffuse),
                      "glossy_lobe": bool(flags & mi.BSDFFlags.Glossy)})
+    return rows
+
+
+ENERGY_MODELS = [    # (name, configuration without energy_compensation)
+    ("cook_torrance ggx smith", {"type": "cook_torrance", "distribution": "ggx",
+                                 "geometry": "smith", "alpha": 0.5, "k": 0.3}),
+    ("cook_torrance beckmann cook_torrance", {"type": "cook_torrance", "alpha": 0.5, "k": 0.3}),
+    ("cook_torrance blinn smith", {"type": "cook_torrance", "distribution": "blinn",
+                                   "geometry": "smith", "alpha": 0.5, "k": 0.3}),
+    ("phong", {"type": "phong", "exponent": 10.0}),
+    ("blinn", {"type": "blinn", "exponent": 10.0}),
+    ("ward", {"type": "ward", "alpha": 0.3}),
+    ("ward anisotropic", {"type": "ward", "alpha_u": 0.05, "alpha_v": 0.3}),
+    ("oren_nayar (EON)", {"type": "oren_nayar", "sigma": 0.8}),
+]
+
+
+def group_energy(s: Settings, refs) -> list[dict]:
+    import mitsuba as mi
+
+    from ..bsdfs import energy
+    built: dict[str, float] = {}
+    rows = []
+    for name, config in ENERGY_MODELS:
+        t_off = timed(mi.load_dict(scene_dict(config, s.res)), s.spp, s.repeats)
+        t_on = timed(mi.load_dict(scene_dict({**config, "energy_compensation": True}, s.res)),
+                     s.spp, s.repeats)
+        spec = mi.load_dict(config).albedo_spec()
+        if spec is not None and spec.name not in built:
+            start = time.perf_counter()
+            energy.build(spec, s.table_samples)
+            built[spec.name] = time.perf_counter() - start
+        rows.append({"name": name, "off_s": t_off["median_s"], "on_s": t_on["median_s"],
+                     "ratio": t_on["median_s"] / t_off["median_s"],
+                     "table": spec.name if spec else "(analytic)",
+                     "table_nodes": int(np.prod([a.n for a in spec.axes])) if spec else 0,
+                     "table_samples": s.table_samples if spec else 0,
+                     "table_build_s": built[spec.name] if spec else 0.0})
     return rows
 
 
@@ -784,6 +827,7 @@ def worker_main(task: str, options: str) -> int:
 RUNNERS = {"builtin": group_builtin, "models": group_models, "oren_nayar": group_oren_nayar,
            "sampling": group_sampling, "integrators": group_integrators,
            "convergence": group_convergence, "scaling": group_scaling, "lobes": group_lobes,
+           "energy": group_energy,
            "materials": group_materials, "frozen": group_frozen, "kernels": group_kernels,
            "tracing": group_tracing}
 
@@ -858,6 +902,14 @@ def findings(results: dict) -> list[str]:
                    all(r["ratio"] < 1.05 for r in g["lobes"]) else
                    "above 1.05 somewhere: a dead lobe may still be traced (a bug)")
         out.append(f"Lobes switched off, time against the model without them: {ratios} ({verdict}).")
+    if g.get("energy"):
+        rows = g["energy"]
+        ratios = ", ".join(f"{r['name']} {r['ratio']:.2f}x" for r in rows)
+        tables = [r for r in rows if r["table_build_s"] > 0]
+        out.append(f"Energy compensation, render time on / off: {ratios} (goal <= 1.10: "
+                   f"{'met' if all(r['ratio'] <= 1.10 for r in rows) else 'not met'}). "
+                   f"Building a table ({tables[0]['table_samples']}² samples per node): "
+                   + ", ".join(f"{r['table']} {r['table_build_s']:.2f} s" for r in tables) + ".")
     if g.get("materials"):
         out.append(materials_finding(g["materials"]))
     if g.get("frozen"):

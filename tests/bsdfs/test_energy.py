@@ -13,7 +13,7 @@ import drjit as dr
 import mitsuba as mi
 
 from mi_brdfs.bsdfs import energy
-from mi_brdfs.bsdfs.cook_torrance import albedo_spec
+from mi_brdfs.bsdfs.cook_torrance import spec as albedo_spec
 from support import albedo, rgb
 
 SPECS = {spec.name: spec for spec in energy.specs()}

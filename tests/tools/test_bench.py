@@ -153,3 +153,22 @@ def test_kernels_and_tracing_every_pair_and_method(results):
     assert sample["render_calls"] >= 1
     assert tracing[(bench.BSDF_PAIRS[0][0], "eval_pdf")]["render_calls"] >= 1
     assert sample["inner_calls"] == "" and sample["texture_evals"] == 2
+
+
+def test_energy_compensation_costed_per_model(results):
+    """Every compensated model, on against off, and the build of each table it uses."""
+    import mitsuba as mi
+    _, r, _ = results
+    rows = {row["name"]: row for row in r["groups"]["energy"]}
+    assert set(rows) == {name for name, _ in bench.ENERGY_MODELS}
+    assert {config["type"] for _, config in bench.ENERGY_MODELS} == {
+        "cook_torrance", "phong", "blinn", "ward", "oren_nayar"}
+    for name, config in bench.ENERGY_MODELS:
+        row = rows[name]
+        assert row["on_s"] > 0 and row["off_s"] > 0
+        spec = mi.load_dict(config).albedo_spec()
+        if spec is None:                              # EON: analytic albedo
+            assert row["table"] == "(analytic)" and row["table_build_s"] == 0
+        else:
+            assert row["table"] == spec.name and row["table_build_s"] > 0
+            assert row["table_nodes"] == np.prod([a.n for a in spec.axes])

@@ -6,6 +6,7 @@ import shutil
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from mi_brdfs.tools import cli, validate
@@ -51,6 +52,36 @@ def test_furnace_flags(report):
     assert ggx["loses_energy"] and ggx["max"] < 0.65
     for row in r["furnace"]:               # rendering and quadrature agree
         assert row["render_vs_quadrature"] < 0.01 * max(1.0, row["max"]), row
+
+
+def test_furnace_shows_compensated_beside_uncompensated(report):
+    """Every configuration of a compensable model has its compensated curve on
+    the same plot; where the catalog promises albedo 1 it is 1 within 1 % up to
+    85° (a check that can fail: see test_compensation_check_fails_off_one), and
+    compensation only ever adds light, never above 1 (EON, Oren-Nayar's
+    compensated form, also removes the lecture model's excess above 1)."""
+    _, r = report
+    compensable = {"cook_torrance", "phong", "blinn", "ward", "oren_nayar"}
+    configs = {(f["model"], f["config"]) for f in r["furnace"]}
+    assert {m for m, _ in configs} >= compensable | {"lambert", "toon"}
+    promised = set()
+    for model, config in configs:
+        rows = {f["mode"]: f for f in r["furnace"] if (f["model"], f["config"]) == (model, config)}
+        expected = {"hdr", "scanline"} | ({validate.COMPENSATED} if model in compensable else set())
+        assert set(rows) == expected, (model, config)
+        assert len({f["plot"] for f in rows.values()}) == 1             # one plot, side by side
+        if model in compensable:
+            comp, hdr = rows[validate.COMPENSATED], rows["hdr"]
+            lost = np.minimum(np.array(hdr["quadrature"]), 1.0)
+            assert np.all(np.array(comp["quadrature"]) >= lost - 1e-3), (model, config)
+            assert comp["max"] <= 1.005, (model, config)
+            if comp["promised"]:
+                assert comp["deviation"] <= 0.01, (model, config)
+                promised.add(model)
+    assert promised >= {"cook_torrance", "phong", "blinn", "ward"}
+    ggx = next(f for f in r["furnace"] if f["model"] == "cook_torrance"
+               and f["config"].startswith("GGX, Smith, alpha = 1"))
+    assert ggx["quadrature"][0] < 0.35                        # uncompensated: 69 % lost
 
 
 def test_sampling_passes(report):
@@ -147,6 +178,16 @@ def test_a_documented_limitation_does_not_fail_validate(tmp_path, monkeypatch):
     # Beyond the documented bound the same failure is a failure again.
     fake_sections(monkeypatch, chi2_passed=True, furnace_max=1.3)
     assert cli.main(["validate", "--quick", "-q", "-o", str(tmp_path / "b")]) == 1
+
+
+@pytest.mark.parametrize("deviation, status", [(0.004, "pass"), (0.02, "fail")])
+def test_compensation_check_fails_off_one(deviation, status):
+    row = {"model": "ward", "config": "c", "mode": validate.COMPENSATED, "promised": True,
+           "deviation": deviation, "max": 1.0, "max_at": 0, "exceeds_1": False,
+           "render_vs_quadrature": 0.0}
+    energy = validate.checks({"furnace": [row]})[0]
+    assert energy["id"] == f"furnace/ward/c/{validate.COMPENSATED}/energy"
+    assert energy["status"] == status and f"{deviation:.4f}" in energy["measured"]
 
 
 def test_polar_lobe_tick_labels_do_not_collide():

@@ -24,9 +24,18 @@
        practice). A Blinn lobe is wider than a Phong lobe of the same gamma
        (about 4x the exponent gives a similar highlight). gamma = 0 makes the
        hdr model exactly Lambertian. The lobe is evaluated and sampled to ~1e-6
-       at any gamma (:mod:`mi_brdfs.powercos`); the bound ``phong.MAX_EXPONENT`` = 1e8
+       at any gamma (:mod:`mi_brdfs.bsdfs.powercos`); the bound ``phong.MAX_EXPONENT`` = 1e8
        keeps it well above the spacing of float32 directions (~1e-7).
      - 100
+   * - ``energy_compensation``
+     - boolean
+     - hdr only (with ``mode="scanline"`` a load-time error): adds the
+       reciprocal multiple-scattering lobe of Kulla & Conty 2017 /
+       Turquin 2019 (:mod:`mi_brdfs.bsdfs.energy`), so that a white lobe
+       (m_S = 1) reflects 1 at every incident angle. Per-bounce colour
+       m_S. E(μ, γ) is tabulated from the hdr lobe above over cos θ and
+       log(1 + γ), γ in [0, 1e8].
+     - false
    * - ``mode``
      - string
      - ``"hdr"`` (radiometric, unclamped) or ``"scanline"`` (the lecture's formula).

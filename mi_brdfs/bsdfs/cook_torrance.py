@@ -39,13 +39,26 @@
      - string
      - G: ``"cook_torrance"`` (the lecture's V-cavity term) or ``"smith"``
        (G1(w_r)·G1(d): the lecture's g_GGX for ggx, the exact Smith Beckmann
-       G1 for beckmann and blinn).
+       G1 for beckmann, and for blinn the Smith G1 of the Blinn distribution
+       itself, tabulated: see :mod:`mi_brdfs.bsdfs.microfacet`).
      - ``"cook_torrance"``
    * - ``sample_visible``
      - bool
      - Beckmann and GGX: sample the visible normals (else the full
        distribution D(m)·cos(theta_m)); Blinn always samples the latter.
      - true
+   * - ``energy_compensation``
+     - boolean
+     - hdr only (with ``mode="scanline"`` a load-time error): adds the
+       reciprocal multiple-scattering lobe of Kulla & Conty 2017 /
+       Turquin 2019 (:mod:`mi_brdfs.bsdfs.energy`), so that a white
+       surface (F0 = 1, m_S = 1; and m_D = 1 if k > 0) reflects 1 at
+       every incident angle. Per-bounce colour m_S·F_avg (F_avg the
+       cosine-weighted average of Schlick's F), so coloured conductors
+       saturate instead of greying; with k > 0 the albedo is k·m_D + (1
+       - k)·(the compensated specular). E(μ, α) is tabulated per D × G
+       with F = 1.
+     - false
    * - ``mode``
      - string
      - ``"hdr"`` or ``"scanline"``.
@@ -57,7 +70,7 @@
      - ``"lobe"``
 
 With w_r the viewer (``si.wi``), d the light (``wo``), h = normalize(d + w_r),
-and D, G, F as in :mod:`mi_brdfs.microfacet`, ``eval`` returns::
+and D, G, F as in :mod:`mi_brdfs.bsdfs.microfacet`, ``eval`` returns::
 
     scanline:  k · clamp01(m_D · clamp(d·n))
                + (1 - k) · clamp01(m_S · D F G / (4 clamp(w_r·n)))

@@ -30,6 +30,18 @@
      - nodes per axis of the table (``method="table"`` only; built once, at
        load time).
      - 64
+   * - ``energy_compensation``
+     - boolean
+     - hdr only (with ``mode="scanline"`` a load-time error; ``method="exact"``
+       only): the energy-preserving Oren-Nayar model EON (Portsmouth,
+       Kutz & Hill, JCGT 2025): Fujii's Oren-Nayar (FON) plus its
+       analytic multiple-scattering lobe, the diffuse lobe of OpenPBR,
+       MaterialX and Cycles; a white surface reflects 1 at every angle.
+       Its roughness is r = B(σ)/A(σ) (the lecture's A, B: the ratio of
+       the retro-reflective term to the Lambertian one, Fujii's mixing
+       ratio), so σ in [0, π/2] maps to r in [0, 0.776] and σ = 0 stays
+       Lambert. Per-bounce colour m_D.
+     - false
    * - ``mode``
      - string
      - ``"hdr"`` (radiometric, unclamped) or ``"scanline"`` (the lecture's formula).

@@ -23,10 +23,19 @@
      - gamma, the specular power: the larger, the smaller and sharper the
        highlight (the lecture: "one or two hundreds" in practice). gamma = 0 is a
        uniform lobe over the hemisphere about the mirror direction. The lobe
-       is evaluated and sampled to ~1e-6 at any gamma (:mod:`mi_brdfs.powercos`);
+       is evaluated and sampled to ~1e-6 at any gamma (:mod:`mi_brdfs.bsdfs.powercos`);
        the bound ``MAX_EXPONENT`` = 1e8 (a lobe 1e-4 rad wide) keeps it well
        above the spacing of float32 directions (~1e-7).
      - 100
+   * - ``energy_compensation``
+     - boolean
+     - hdr only (with ``mode="scanline"`` a load-time error): adds the
+       reciprocal multiple-scattering lobe of Kulla & Conty 2017 /
+       Turquin 2019 (:mod:`mi_brdfs.bsdfs.energy`), so that a white lobe
+       (m_S = 1) reflects 1 at every incident angle. Per-bounce colour
+       m_S. E(μ, γ) is tabulated from the hdr lobe above over cos θ and
+       log(1 + γ), γ in [0, 1e8].
+     - false
    * - ``mode``
      - string
      - ``"hdr"`` (radiometric, unclamped) or ``"scanline"`` (the lecture's formula).
@@ -53,7 +62,7 @@ clamp(w_r·r)^gamma is 0 wherever w_r·r <= 0, also for gamma = 0 (0^0 := 0, the
 limit gamma -> 0+: the lobe is the hemisphere of light directions about r',
 as the lecture's "zero when the angle is greater than 90°"; its hdr albedo is
 m_S (1 + cos(theta_i))/2). It is evaluated without float32
-cancellation for any gamma (:mod:`mi_brdfs.powercos`).
+cancellation for any gamma (:mod:`mi_brdfs.bsdfs.powercos`).
 
 Sampling: cosine hemisphere for the diffuse lobe; for the specular lobe the
 density (gamma + 1)/(2 pi) cos^gamma(alpha) about the viewer's mirror direction

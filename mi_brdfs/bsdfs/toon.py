@@ -56,7 +56,8 @@
      - none
    * - ``mode``
      - string
-     - ``"hdr"`` (unclamped) or ``"scanline"`` (the lecture's formula).
+     - ``"hdr"`` (unclamped, normalised by 1/(2π): see below) or
+       ``"scanline"`` (the lecture's formula).
      - ``"hdr"``
 
 The lecture's model, with d the light (``wo``), ω_r the viewer (``si.wi``), n
@@ -68,13 +69,20 @@ the normal and c = ω_r·r (phong) or n·h (blinn)::
 and ``eval`` returns::
 
     scanline:  clamp01(f_diffuse) + clamp01(f_specular)
-    hdr:       f_diffuse + f_specular
+    hdr:       (f_diffuse + f_specular) / (2 pi)
 
 The toon colours are already the shaded result (they replace Lambert's
-m_D·clamp(d·n)), so there is no cos θ_o factor in either mode: the hdr mode is
-the scanline one without the [0, 1] clamps, a stylised model with no energy
-claim (its white-furnace "albedo" is 3.77 for the defaults at normal incidence, see
-``tests/bsdfs/test_toon.py``). The cartoon's dark side is m_D2, also for lights below
+m_D·clamp(d·n)), so there is no cos θ_o factor in either mode. The hdr mode
+is normalised so that a toon surface reflects at most its brightest colours.
+Derivation: ``eval`` is integrated over the light directions d in the white
+furnace, and a lobe that is a constant colour c over a solid angle Ω of the
+hemisphere reflects c·Ω·N, N the normalisation. The largest Ω is the whole
+hemisphere, 2π, so N = 1/(2π) makes each lobe's albedo at most its brightest
+colour (per channel, the larger of m_D1 and m_D2 for the diffuse bands, of
+m_S1 and m_S2 for the highlight), and a white diffuse-only toon (m_D1 = m_D2 = 1, m_S = 0)
+reflects exactly 1 at every angle (the white furnace in the catalog). The flat
+bands stay flat: N is a constant, not a cosine. The scanline mode is the
+lecture's formula, unchanged. The cartoon's dark side is m_D2, also for lights below
 the surface (``lit_from_behind()``); the specular is 0 for them, and a viewer
 below the surface gets nothing. A cosine exactly equal to its threshold takes
 the first colour (>=, as in the lecture).

@@ -38,6 +38,17 @@
        its angle form (tan delta, cos phi, sin phi). Equal to float32
        precision; the choice is pure speed.
      - ``"vectors"``
+   * - ``energy_compensation``
+     - boolean
+     - hdr only (with ``mode="scanline"`` a load-time error): adds the
+       reciprocal multiple-scattering lobe of Kulla & Conty 2017 /
+       Turquin 2019 (:mod:`mi_brdfs.bsdfs.energy`), so that a white lobe
+       (m_S = 1) reflects 1 at every incident angle. Per-bounce colour
+       m_S. E is tabulated from the hdr lobe over (cos θ, α) when
+       isotropic and (cos θ, sin²φ, α_u, α_v) when anisotropic; where
+       Ward's own albedo exceeds 1 (within a fraction of a degree of the
+       horizon) E is clamped to 1: nothing is added there.
+     - false
    * - ``mode``
      - string
      - ``"hdr"`` or ``"scanline"``.

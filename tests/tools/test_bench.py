@@ -172,3 +172,12 @@ def test_energy_compensation_costed_per_model(results):
         else:
             assert row["table"] == spec.name and row["table_build_s"] > 0
             assert row["table_nodes"] == np.prod([a.n for a in spec.axes])
+
+
+def test_peak_memory_is_the_workers_own():
+    """A worker forked from a large process reports its own peak resident
+    memory, not its parent's (ru_maxrss inherits the parent's at fork: a full
+    bench run once reported 397 MiB for every kind and count)."""
+    ballast = np.ones(64 * 1024 * 1024 // 8 * 8)          # 512 MiB resident in this process
+    own = bench.in_subprocess("materials", kind="diffuse", n=1, res=8, spp=1, repeats=1)
+    assert ballast.sum() > 0 and own["peak_mib"] < 400, own["peak_mib"]

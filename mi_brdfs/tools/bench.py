@@ -950,8 +950,8 @@ def findings(results: dict) -> list[str]:
             f"({r['eval_pdf']['ratio']:.1f}x). Tracing a path-traced render calls each "
             f"instance's sample {r['sample']['render_calls']} and eval_pdf "
             f"{r['eval_pdf']['render_calls']} times (eval and pdf "
-            f"{r['eval']['render_calls_all']} times, as sample calls eval_pdf again); one "
-            f"sample call evaluates textures {r['sample']['texture_evals']} times and builds "
+            f"{r['eval']['render_calls_all']} times); one sample call makes "
+            f"{r['sample']['texture_evals']} texture evaluations and builds "
             f"{r['sample']['microfacet_objects']} MicrofacetDistribution objects.")
     return out
 

@@ -25,7 +25,7 @@ import numpy as np
 
 from mi_brdfs.render.frozen import GradientStep
 from mi_brdfs.render.tonemap import to_srgb8
-from mi_brdfs.tools.analysis import sphere_scene
+from mi_brdfs.tools.analysis import bitmap, fit_texture, sphere_scene
 
 QUICK = os.environ.get("MI_BRDFS_QUICK") == "1"
 RES, SPP = (48, 4) if QUICK else (96, 8)
@@ -156,57 +156,16 @@ assert ct_losses[-1] < b_losses[-1]      # the same model family fits better tha
 # texel's lobe (five scenes: moving one light through `params` between renders
 # would leave the earlier renders' gradients computed with the last position,
 # in Mitsuba 3.9). The loss is the relative squared error summed over the
-# five renders, so a highlight does not outweigh the rest.
+# five renders, so a highlight does not outweigh the rest
+# (`mi_brdfs.tools.analysis.fit_texture` holds the loop).
 #
 # The colour map starts at black: a colour of exactly 0 has no lobe at load
 # time ("model only what a scene requires"), but a parameter being
 # differentiated keeps its lobe traced, so the gradient flows from the bound.
 
 # %%
-TEX, PLANE_RES, PLANE_SPP = 8, 32, 4
+TEX = 8
 LIGHTS = [[0.6, 0.6, 0.8], [-0.7, 0.2, 0.6], [0.1, -0.8, 1.0], [0.7, -0.6, 0.5], [-0.5, 0.8, 0.9]]
-
-
-def bitmap(values):
-    """An 8 x 8 texture with nearest-texel lookups, values as stored (no sRGB)."""
-    data = np.asarray(values, dtype=np.float32)
-    return {"type": "bitmap", "bitmap": mi.Bitmap(data if data.ndim == 3 else data[..., None]),
-            "raw": True, "filter_type": "nearest", "wrap_mode": "clamp"}
-
-
-def plane_scene(bsdf, light):
-    T = mi.ScalarTransform4f
-    return mi.load_dict({
-        "type": "scene", "integrator": {**SCANLINE, "hide_emitters": True},
-        "sensor": {"type": "perspective", "fov": 40,
-                   "to_world": T().look_at(origin=[0, 0, 3.0], target=[0, 0, 0], up=[0, 1, 0]),
-                   "film": {"type": "hdrfilm", "width": PLANE_RES, "height": PLANE_RES,
-                            "rfilter": {"type": "box"}}},
-        "plane": {"type": "rectangle", "bsdf": bsdf, "to_world": T().scale(1.05)},
-        "light": {"type": "point", "position": light, "intensity": {"type": "rgb", "value": 2.0}},
-    })
-
-
-def fit_texture(truth, start, key, steps, lr, lo, hi):
-    """Adam on one texture shared by the five scenes; returns (fitted, losses)."""
-    references = [mi.render(plane_scene(truth, light), spp=PLANE_SPP, seed=3) for light in LIGHTS]
-    scenes = [plane_scene(start, light) for light in LIGHTS]
-    params = [mi.traverse(s) for s in scenes]
-    opt = mi.ad.Adam(lr=lr)
-    opt[key] = params[0][key]
-    losses = []
-    for _ in range(steps):
-        loss = mi.Float(0.0)
-        for s, p, ref in zip(scenes, params, references):
-            p.update(opt)
-            image = mi.render(s, p, spp=PLANE_SPP, seed=3)
-            loss += dr.mean(dr.square(image - ref) / dr.square(ref + 0.01), axis=None)
-        dr.backward(loss)
-        opt.step()
-        opt[key] = dr.clip(opt[key], lo, hi)           # the parameter's valid range
-        losses.append(float(np.array(loss).ravel()[0]))
-    return np.array(opt[key]), losses
-
 
 rng = np.random.default_rng(5)
 rough_truth = rng.uniform(0.1, 0.6, (TEX, TEX))
@@ -214,15 +173,16 @@ ct = {"type": "cook_torrance", "distribution": "ggx", "geometry": "smith", "k": 
       "specular_reflectance": 0.8}
 rough_fit, rough_losses = fit_texture({**ct, "alpha": bitmap(rough_truth)},
                                       {**ct, "alpha": bitmap(np.full((TEX, TEX), 0.3))},
-                                      "plane.bsdf.alpha.data", steps=60, lr=0.02, lo=1e-3, hi=1.0)
+                                      "plane.bsdf.alpha.data", LIGHTS, steps=60, lr=0.02,
+                                      lo=1e-3, hi=1.0)
 rough_fit = rough_fit[..., 0]
 
 colour_truth = rng.uniform(0.1, 0.9, (TEX, TEX, 3))
 ph = {"type": "phong", "exponent": 30.0, "specular_reflectance": 0.3}
 colour_fit, colour_losses = fit_texture({**ph, "diffuse_reflectance": bitmap(colour_truth)},
                                         {**ph, "diffuse_reflectance": bitmap(np.zeros((TEX, TEX, 3)))},
-                                        "plane.bsdf.diffuse_reflectance.data", steps=100, lr=0.05,
-                                        lo=0.0, hi=1.0)
+                                        "plane.bsdf.diffuse_reflectance.data", LIGHTS, steps=100,
+                                        lr=0.05, lo=0.0, hi=1.0)
 rough_err, colour_err = np.abs(rough_fit - rough_truth), np.abs(colour_fit - colour_truth)
 print(f"roughness map: median error {np.median(rough_err):.4f}, largest {rough_err.max():.4f}")
 print(f"colour map (from black): largest error {colour_err.max():.4f}")

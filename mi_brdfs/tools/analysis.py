@@ -1,5 +1,7 @@
 """Looking at a BSDF: its values in the plane of incidence, over the hemisphere,
-and its directional albedo. Used by the validation report and the notebooks."""
+and its directional albedo; the small scenes that show one (a sphere, a
+textured plane) and fitting a texture to renders by gradient descent. Used by
+the validation report, the benchmarks, the notebooks and the tests."""
 from __future__ import annotations
 
 import math
@@ -88,22 +90,27 @@ def polar_lobes(ax, bsdf, angles=(0, 30, 60, 80), title: str = "") -> None:
         ax.set_title(title, fontsize=10)
 
 
+def camera(res: int, fov: float, origin=(0.0, 0.0, 4.0), target=(0.0, 0.0, 0.0)) -> dict:
+    """A perspective sensor looking from ``origin`` at ``target`` (y up), a
+    square ``res``² film with a box filter and an independent sampler."""
+    import mitsuba as mi
+    return {"type": "perspective", "fov": fov,
+            "to_world": mi.ScalarTransform4f().look_at(origin=list(origin), target=list(target),
+                                                       up=[0, 1, 0]),
+            "film": {"type": "hdrfilm", "width": res, "height": res, "rfilter": {"type": "box"}},
+            "sampler": {"type": "independent"}}
+
+
 def sphere_scene(bsdf: dict, res: int = 128, integrator: dict | None = None,
                  light=(2.0, 2.5, 3.0), intensity: float = 12.0, env: float = 0.0) -> dict:
     """A unit sphere seen from +z, lit by one point light (and an optional
     constant environment): the scene the notebooks use to show a BSDF."""
-    import mitsuba as mi
-    T = mi.ScalarTransform4f
     mode = bsdf.get("mode", "hdr")
     d = {
         "type": "scene",
         "integrator": integrator or ({"type": "scanline"} if mode == "scanline"
                                      else {"type": "path", "max_depth": 2}),
-        "sensor": {"type": "perspective", "fov": 32,
-                   "to_world": T().look_at(origin=[0, 0, 4], target=[0, 0, 0], up=[0, 1, 0]),
-                   "film": {"type": "hdrfilm", "width": res, "height": res,
-                            "rfilter": {"type": "box"}},
-                   "sampler": {"type": "independent"}},
+        "sensor": camera(res, 32),
         "sphere": {"type": "sphere", "bsdf": bsdf},
         "light": {"type": "point", "position": list(light),
                   "intensity": {"type": "rgb", "value": intensity}},
@@ -118,3 +125,66 @@ def render_sphere(bsdf: dict, res: int = 128, spp: int = 16, **scene_options) ->
     import mitsuba as mi
     scene = mi.load_dict(sphere_scene(bsdf, res, **scene_options))
     return np.array(mi.render(scene, spp=spp))[..., :3]
+
+
+# ----------------------------------------------------------------------------
+#  Inverse rendering: a texture fitted to renders
+# ----------------------------------------------------------------------------
+
+def bitmap(values) -> dict:
+    """A ``bitmap`` texture of an (H, W) or (H, W, C) array: nearest texels,
+    values as stored (no sRGB), clamped at the edges."""
+    import mitsuba as mi
+    data = np.asarray(values, dtype=np.float32)
+    return {"type": "bitmap", "bitmap": mi.Bitmap(data if data.ndim == 3 else data[..., None]),
+            "raw": True, "filter_type": "nearest", "wrap_mode": "clamp"}
+
+
+def plane_scene(bsdf: dict, light, res: int = 32) -> dict:
+    """A square plane that fills the view from +z, lit by one point light at
+    ``light``, rendered by the scan-line integrator without its clamp (direct
+    light: deterministic for a fixed seed, and unbiased in hdr mode)."""
+    import mitsuba as mi
+    return {"type": "scene",
+            "integrator": {"type": "scanline", "clamp": False, "hide_emitters": True},
+            "sensor": camera(res, 40, origin=(0.0, 0.0, 3.0)),
+            "plane": {"type": "rectangle", "bsdf": bsdf,
+                      "to_world": mi.ScalarTransform4f().scale(1.05)},
+            "light": {"type": "point", "position": list(light),
+                      "intensity": {"type": "rgb", "value": 2.0}}}
+
+
+def fit_texture(truth: dict, start: dict, key: str, lights, steps: int, lr: float,
+                lo: float, hi: float, res: int = 32, spp: int = 4, seed: int = 3):
+    """Fit the parameter ``key`` of the BSDF ``start`` (e.g. a :func:`bitmap`'s
+    ``plane.bsdf.alpha.data``) to renders of ``truth`` by Adam, one
+    :func:`plane_scene` per light, clipping it to [lo, hi] after each step.
+    The loss is the relative squared error summed over the lights, so a
+    highlight does not outweigh the rest. Returns (the fitted values, the
+    loss of each step).
+
+    One scene per light, not one light moved through ``params`` between the
+    renders of a step: Mitsuba 3.9 then computes the earlier renders'
+    gradients with the last position (measured with its ``roughconductor``
+    too). The step is not frozen (:class:`mi_brdfs.render.frozen.GradientStep`
+    records one scene's render, loss and backward pass)."""
+    import drjit as dr
+    import mitsuba as mi
+    references = [dr.detach(mi.render(mi.load_dict(plane_scene(truth, light, res)),
+                                      spp=spp, seed=seed)) for light in lights]
+    scenes = [mi.load_dict(plane_scene(start, light, res)) for light in lights]
+    params = [mi.traverse(s) for s in scenes]
+    opt = mi.ad.Adam(lr=lr)
+    opt[key] = params[0][key]
+    losses = []
+    for _ in range(steps):
+        loss = mi.Float(0.0)
+        for scene, p, reference in zip(scenes, params, references):
+            p.update(opt)                           # the one variable, in every scene
+            image = mi.render(scene, p, spp=spp, seed=seed)
+            loss += dr.mean(dr.square(image - reference) / dr.square(reference + 0.01), axis=None)
+        dr.backward(loss)
+        opt.step()
+        opt[key] = dr.clip(opt[key], lo, hi)
+        losses.append(float(np.array(loss).ravel()[0]))
+    return np.array(opt[key]), np.array(losses)

@@ -64,6 +64,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .analysis import camera
+
 GROUPS = ("builtin", "models", "oren_nayar", "sampling", "integrators", "convergence", "scaling",
           "lobes", "energy", "materials", "frozen", "kernels", "tracing")
 
@@ -133,11 +135,7 @@ def scene_dict(bsdf: dict, res: int, integrator: dict | None = None, lights: int
     d = {
         "type": "scene",
         "integrator": integrator or {"type": "path", "max_depth": 3},
-        "sensor": {"type": "perspective", "fov": 36,
-                   "to_world": T().look_at(origin=[0, 1.2, 4], target=[0, 0, 0], up=[0, 1, 0]),
-                   "film": {"type": "hdrfilm", "width": res, "height": res,
-                            "rfilter": {"type": "box"}},
-                   "sampler": {"type": "independent"}},
+        "sensor": camera(res, 36, origin=(0.0, 1.2, 4.0)),
         "sphere": {"type": "sphere", "bsdf": bsdf},
         "env": {"type": "constant", "radiance": {"type": "rgb", "value": env}},
     }
@@ -475,18 +473,11 @@ def spheres_scene(kind: str, n: int, res: int, max_depth: int = 3) -> dict:
     """``n`` unit spheres in a square grid, each with its own ``kind`` material,
     in a constant environment, path traced (the issue's scene: 200 spheres,
     depth 3, 128², 64 spp)."""
-    import mitsuba as mi
-    T = mi.ScalarTransform4f
     side = math.ceil(math.sqrt(n))
     spacing, fov = 2.5, 40.0
     distance = 1.2 * side * spacing / (2 * math.tan(math.radians(fov / 2))) + 2
     d = {"type": "scene", "integrator": {"type": "path", "max_depth": max_depth},
-         "sensor": {"type": "perspective", "fov": fov,
-                    "to_world": T().look_at(origin=[0, 0, distance], target=[0, 0, 0],
-                                            up=[0, 1, 0]),
-                    "film": {"type": "hdrfilm", "width": res, "height": res,
-                             "rfilter": {"type": "box"}},
-                    "sampler": {"type": "independent"}},
+         "sensor": camera(res, fov, origin=(0.0, 0.0, distance)),
          "env": {"type": "constant", "radiance": {"type": "rgb", "value": 1.0}}}
     for i in range(n):
         x, y = (i % side - (side - 1) / 2) * spacing, (i // side - (side - 1) / 2) * spacing

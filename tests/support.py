@@ -95,6 +95,22 @@ def evaluate(bsdf, wi, wo, uv=None):
     return (value.T if value.ndim == 2 else value[:, None]), pdf
 
 
+def error_line(error: BaseException) -> str:
+    """The last line of an error's message: the one a user reads."""
+    return str(error).strip().splitlines()[-1]
+
+
+def assert_refused(config: dict, name: str, shown: str, valid: str) -> None:
+    """Loading ``config`` fails with one line naming the plugin, the parameter
+    ``name``, its value as ``shown`` and ``valid`` (the valid range or choice)."""
+    import pytest
+    with pytest.raises(Exception) as info:
+        mi.load_dict(config)
+    last = error_line(info.value)
+    assert f"{config['type']}: parameter '{name}' = {shown} is invalid" in last, last
+    assert valid in last, last
+
+
 def finite(x) -> bool:
     return bool(np.all(np.isfinite(np.array(x))))
 

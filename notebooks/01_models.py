@@ -10,7 +10,7 @@
 # Set `MI_BRDFS_QUICK=1` for a small, fast run (CI does).
 
 # %%
-import mi_brdfs  # first: sets up LLVM for drjit, registers the plugins
+import mi_brdfs  # noqa: F401  (first: sets up LLVM for drjit, registers the plugins)
 import os
 
 import matplotlib.pyplot as plt

@@ -14,6 +14,7 @@ import matplotlib.pyplot as plt
 import mitsuba as mi
 import numpy as np
 
+from mi_brdfs.bsdfs import BY_NAME
 from mi_brdfs.tools import analysis, catalog
 
 QUICK = os.environ.get("MI_BRDFS_QUICK") == "1"
@@ -75,7 +76,7 @@ plt.show()
 # %%
 fig, ax = plt.subplots(figsize=(6.5, 3.5))
 for i, (name, configs) in enumerate(catalog.FURNACE.items()):
-    if not mi.load_dict(configs[0][1]).compensable:
+    if not BY_NAME[name].compensable:
         continue
     white = [(label, c) for label, c in configs
              if catalog.promises_one(name, {**c, "energy_compensation": True})]

@@ -11,11 +11,8 @@ import os
 import tempfile
 
 import matplotlib.pyplot as plt
-import mitsuba as mi
-import numpy as np
 
 from mi_brdfs.tools import compare, validate
-from mi_brdfs.render.tonemap import to_srgb8
 
 QUICK = os.environ.get("MI_BRDFS_QUICK") == "1"
 out = os.path.join(tempfile.mkdtemp(), "report")

@@ -5,7 +5,8 @@
   :mod:`.toon` (diffuse), :mod:`.phong`, :mod:`.blinn`, :mod:`.ward`,
   :mod:`.cook_torrance` (specular);
 - the shared formulas: :mod:`.microfacet` (D, F, G), :mod:`.powercos`
-  (power-cosine lobes in float32).
+  (power-cosine lobes in float32), :mod:`.energy` (energy compensation and
+  its albedo tables, shipped in ``data/``), :mod:`.grid` (tabulated functions).
 """
 from __future__ import annotations
 
@@ -20,6 +21,7 @@ from .ward import Ward
 
 # In the lecture's order: diffuse models, then specular ones.
 PLUGINS = (Lambert, OrenNayar, Toon, Phong, Blinn, Ward, CookTorrance)
+BY_NAME = {cls.name: cls for cls in PLUGINS}     # plugin name -> class
 
 
 def register() -> None:

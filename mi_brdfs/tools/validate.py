@@ -227,9 +227,9 @@ PRESERVED_TOL = 0.01
 def furnace_curves(config: dict) -> list[tuple[str, dict]]:
     """(label, configuration) of each furnace curve: both modes, and hdr with
     energy compensation where the model has it."""
-    import mitsuba as mi
+    from ..bsdfs import BY_NAME
     curves = [(mode, {**config, "mode": mode}) for mode in MODES]
-    if mi.load_dict(config).compensable:
+    if BY_NAME[config["type"]].compensable:
         curves.append((COMPENSATED, {**config, "mode": "hdr", "energy_compensation": True}))
     return curves
 

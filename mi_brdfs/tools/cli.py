@@ -311,7 +311,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
     only = [g.strip() for g in args.only.split(",")] if args.only else None
     results = bench.run(args.output, quick=args.quick, only=only, cache_dir=args.cache, log=log)
     print(f"bench: {len(results['groups'])} groups in {results['seconds']:.0f} s -> "
-          f"{os.path.join(args.output, 'README.md')}")
+          f"{os.path.join(args.output, 'README.md')}"
+          + (" (--quick: a smoke test; its numbers are not measurements)" if args.quick else ""))
     return 0
 
 
@@ -397,8 +398,11 @@ def parser() -> Parser:
     v.set_defaults(run=cmd_validate)
 
     b = sub.add_parser("bench", parents=[common()], help="measure the speed/accuracy trade-offs")
-    b.add_argument("-o", "--output", required=True, help="results directory")
-    b.add_argument("--quick", action="store_true", help="tiny scene, few repeats (CI)")
+    b.add_argument("-o", "--output", required=True,
+                   help="report folder: new, empty, or a previous report")
+    b.add_argument("--quick", action="store_true",
+                   help="a smoke test that every group runs: tiny scene, few repeats, no "
+                        "findings (CI); its numbers are not measurements")
     b.add_argument("--only", default=None, help="comma-separated groups (default: all)")
     b.add_argument("--cache", default=None, help="reference cache (default ~/.cache/mi_brdfs)")
     b.set_defaults(run=cmd_bench)

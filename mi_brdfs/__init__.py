@@ -20,15 +20,14 @@ import mitsuba as mi         # noqa: E402
 _llvm.check()
 
 from . import bsdfs                       # noqa: E402
-from .bsdfs import (PLUGINS, Blinn, CookTorrance, Lambert, OrenNayar,  # noqa: E402
-                    Phong, Toon, Ward)
+from .bsdfs import *                      # noqa: E402,F401,F403  (PLUGINS and every plugin class)
 from .render import integrator            # noqa: E402
 
 DEFAULT_VARIANT = "llvm_ad_rgb"
 TOOLS = ("compare", "validate", "bench", "analysis", "catalog", "cli")
 
-__all__ = ["register", "PLUGINS", "DEFAULT_VARIANT", "Lambert", "OrenNayar", "Toon", "Phong",
-           "Blinn", "Ward", "CookTorrance", *TOOLS]
+__all__ = ["register", "PLUGINS", "DEFAULT_VARIANT", *(cls.__name__ for cls in bsdfs.PLUGINS),
+           *TOOLS]
 
 
 def register() -> str:

@@ -216,11 +216,6 @@ def grad_enabled(obj) -> bool:
     return any(dr.grad_enabled(a) for a in _arrays(obj) if dr.is_array_v(a))
 
 
-def to_float(x) -> float:
-    """A Python float from an opaque Float (JIT variants) or a float (scalar ones)."""
-    return float(x[0]) if dr.is_array_v(x) else float(x)
-
-
 class Reader:
     """Reads one plugin's properties and raises ParameterError on bad values."""
 

@@ -46,7 +46,7 @@ def test_furnace_flags(report):
     assert not furnace_row(r, "phong", "hdr")["exceeds_1"]
     blinn_smith = next(f for f in r["furnace"] if f["model"] == "cook_torrance" and
                        f["config"].startswith("Blinn D, Smith") and f["mode"] == "hdr")
-    # Blinn's own Smith G1 (issue 13): never above 1 (Beckmann's G1 gave 1.30 at 89 deg)
+    # Blinn's own Smith G1: never above 1 (Beckmann's G1 gave 1.30 at 89 deg)
     assert not blinn_smith["exceeds_1"] and blinn_smith["max"] <= 1.0
     ggx = furnace_row(r, "cook_torrance", "hdr")
     assert ggx["loses_energy"] and ggx["max"] < 0.65

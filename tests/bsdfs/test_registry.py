@@ -1,6 +1,7 @@
 """One plugin registry (``mi_brdfs.bsdfs.PLUGINS``) and what derives from it:
 the package's exports, the plugins Mitsuba loads by name, the catalog's
-entries, the lobe plots, the bench's models, the transcription tests. A model
+entries, the lobe plots, the bench's models, the transcription tests, the
+bundled scenes and their renders. A model
 added to the registry alone appears everywhere or fails here, saying where it
 is missing. And the declarations every model is built from (``Param``,
 ``Option``) are checked when its class is defined.
@@ -17,9 +18,11 @@ import pytest
 import mi_brdfs
 from mi_brdfs.bsdfs import BY_NAME, PLUGINS
 from mi_brdfs.bsdfs.base import BRDF, DeclarationError, Option, Param
+from mi_brdfs import scenes
 from mi_brdfs.tools import catalog
 
 TESTS = Path(__file__).parent
+RENDERS = TESTS.parent.parent / "scenes" / "renders"
 NAMES = [cls.name for cls in PLUGINS]
 
 
@@ -43,6 +46,10 @@ def test_every_plugin_is_everywhere(name):
             "compensable, but not in catalog.BENCH_ENERGY"
     assert (TESTS / f"test_{name}.py").is_file(), \
         f"no lecture-transcription test tests/bsdfs/test_{name}.py (CONTRIBUTING.md)"
+    assert scenes.path(name) is not None, f"no bundled scene scenes/{name}.xml"
+    for mode in ("scanline", "hdr"):
+        assert (RENDERS / f"{name}_{mode}.png").is_file(), \
+            f"no render scenes/renders/{name}_{mode}.png (sh scenes/renders/make.sh)"
 
 
 def test_the_catalog_has_entries_for_registered_plugins_only():

@@ -80,7 +80,7 @@ class Entry:
                                                   # bench compares (None: the defaults)
 
 
-_BUILDERS: dict[str, Callable[[str], Entry]] = {}     # plugin name -> its entry's builder
+BUILDERS: dict[str, Callable[[str], Entry]] = {}      # plugin name -> what builds its entry
 _BUILT: dict[str, Entry] = {}
 
 
@@ -89,7 +89,8 @@ def builds(*names: str):
     of each of these plugins."""
     def register(builder: Callable[[str], Entry]):
         for name in names:
-            _BUILDERS[name] = builder
+            BUILDERS[name] = builder
+            _BUILT.pop(name, None)
         return builder
     return register
 
@@ -97,10 +98,10 @@ def builds(*names: str):
 def entry(name: str) -> Entry:
     """The Entry of plugin ``name``, built on first use."""
     if name not in _BUILT:
-        if name not in _BUILDERS:
+        if name not in BUILDERS:
             raise LookupError(f"plugin {name!r} has no catalog entry: add a function "
                               f"@builds({name!r}) to mi_brdfs/tools/catalog.py (CONTRIBUTING.md)")
-        _BUILT[name] = _BUILDERS[name](name)
+        _BUILT[name] = BUILDERS[name](name)
     return _BUILT[name]
 
 

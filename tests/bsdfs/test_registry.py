@@ -54,7 +54,7 @@ def test_every_plugin_is_everywhere(name):
 
 def test_the_catalog_has_entries_for_registered_plugins_only():
     assert list(catalog.ENTRIES) == NAMES
-    assert set(catalog._BUILDERS) <= set(NAMES), "an entry for a plugin that is not registered"
+    assert set(catalog.BUILDERS) <= set(NAMES), "an entry for a plugin that is not registered"
 
 
 def test_a_plugin_without_an_entry_is_named():
@@ -109,16 +109,15 @@ catalog entry (its builder raises) and one of phong's configurations (a
 misspelt parameter, which Mitsuba refuses at load time)."""
 from mi_brdfs.tools import catalog
 
+@catalog.builds("lambert")
 def no_entry(name):
     raise KeyError("a misspelt key in the entry")
 
-def misspelt(name, build=catalog._BUILDERS["phong"]):
+@catalog.builds("phong")
+def misspelt(name, build=catalog.BUILDERS["phong"]):
     entry = build(name)
     entry.interior.append({"type": name, "exponant": 20.0})
     return entry
-
-catalog._BUILDERS["lambert"] = no_entry
-catalog._BUILDERS["phong"] = misspelt
 '''
 
 

@@ -251,6 +251,12 @@ def test_a_cache_inside_the_report_folder_is_refused(tmp_path, capsys):
     assert not (tmp_path / "out").exists()
 
 
+def test_an_unknown_group_is_refused(tmp_path, capsys):
+    line = refused(["--only", "builtin,nonesuch", "-o", str(tmp_path / "out")], capsys)
+    assert "unknown bench group 'nonesuch'; valid: builtin, models," in line
+    assert not (tmp_path / "out").exists()
+
+
 def test_a_previous_report_is_replaced(results, tmp_path):
     """A folder holding a bench report (its marker lists its files) takes the
     next run: the old report's files go, the new one's come, nothing else."""

@@ -157,9 +157,11 @@ def resolve_scene(arg: str) -> tuple[str, bool]:
         raise CLIError(f"scene {arg} is a folder; give an XML file or a bundled scene's name")
     if os.path.exists(arg):
         return arg, False
-    bundled = scenes.path(arg)
-    if bundled is not None and os.sep not in arg:
-        return str(bundled), True
+    if os.sep not in arg:
+        try:
+            return scenes.path(arg), True
+        except ValueError:
+            pass
     raise CLIError(f"scene not found: {arg} (not a file; bundled scenes: "
                    f"{', '.join(scenes.names())})")
 

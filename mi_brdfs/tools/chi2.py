@@ -5,21 +5,30 @@ density ``pdf()`` integrated over each histogram cell by the trapezoid rule
 on a fixed ``ires`` × ``ires`` grid of points per cell. A lobe narrower than
 the spacing of that grid is integrated wrongly: the cell's expected count is
 off by far more than the histogram's noise, and a correct sampler is rejected
-(phong γ = 1000 at normal incidence: p = 0 at ``ires`` 16, 0.74 at 64–256).
+(at ``ires`` 16: phong γ = 1000 at normal incidence, sharp Blinn and Ward
+lobes at 85°, the toon model's narrow band at threshold 0.97).
 
-:class:`ConvergedChiSquareTest` integrates every cell at ``ires`` first,
-exactly as Mitsuba does, then doubles the points per axis for the cells
-whose integral is still changing, until the change of every cell is small
-against that cell's Poisson noise::
+:class:`ConvergedChiSquareTest` integrates every cell at ``ires`` first
+(9 × 9 points), placed and weighted as Mitsuba does, then halves the
+spacing of the points (n → 2n − 1 per axis, the old points kept) for the
+cells whose integral is still changing, until the change of every cell is
+small against that cell's Poisson noise::
 
-    |I_2n − I_n| ≤ TOLERANCE · sqrt(max(I_2n, 1))     (expected sample counts)
+    |I_fine − I_coarse| ≤ TOLERANCE · sqrt(max(I_fine, 1))     (expected sample counts)
 
 so that no cell's integration error adds more than TOLERANCE² to the χ²
-statistic. Smooth cells stop after one doubling; the cells of a sharp lobe
-or at a discontinuity (the toon model's bands) are refined up to
-``max_ires``. A cell that has not converged there is counted in
-:attr:`unconverged`, and the test is not passed on it: the report says so
-instead of a p-value it cannot trust.
+statistic (the change bounds the error of I_fine: the trapezoid rule's
+error falls by 4 per halving where the density is smooth, by 2 across a
+step). The grids are nested so that the change cannot vanish by accident:
+across a step the error is the step's offset from the middle of the
+interval holding it, and halving the interval moves that middle by a
+quarter of its length. (Doubling the points instead can put a symmetric
+pair around the same middle at both levels: a toon band's edge was then
+"converged" at 8 and 16 points, wrong by 1.5 % of a row of cells.)
+Smooth cells stop after one doubling; the cells of a sharp lobe or at a
+discontinuity (the toon model's bands) are refined up to ``max_ires``. A
+cell that has not converged there is counted in :attr:`unconverged`, and
+the test fails: the report says so instead of a p-value it cannot trust.
 
 The test keeps its power: a density that is wrong by a few per cent (the
 catalog's negative controls) is still rejected, since finer integration
@@ -34,7 +43,8 @@ import mitsuba as mi
 import numpy as np
 
 TOLERANCE = 0.25         # allowed integration error, in units of a cell's Poisson noise
-MAX_IRES = 1024          # points per cell and axis, at most
+START_IRES = 9           # points per cell and axis of the first table (8 intervals)
+MAX_IRES = 1025          # points per cell and axis, at most (1024 intervals)
 MAX_LANES = 1 << 24      # density evaluations per kernel launch
 
 
@@ -42,12 +52,14 @@ class ConvergedChiSquareTest(mi.chi2.ChiSquareTest):
     """``mi.chi2.ChiSquareTest`` (same arguments) whose density table is
     refined per cell until it converges (see the module's docstring).
 
+    ``ires`` is where the refinement starts (default :data:`START_IRES`).
     After :meth:`tabulate_pdf`: :attr:`ires_reached` (the finest points per
-    axis any cell needed), :attr:`refined` (cells integrated more finely than
-    ``ires``) and :attr:`unconverged` (cells still changing at ``max_ires``)."""
+    axis any cell needed) and :attr:`unconverged` (cells still changing at
+    ``max_ires``: the test then fails)."""
 
-    def __init__(self, *args, max_ires: int = MAX_IRES, tolerance: float = TOLERANCE, **kwargs):
-        super().__init__(*args, **kwargs)
+    def __init__(self, *args, ires: int = None, max_ires: int = MAX_IRES,
+                 tolerance: float = TOLERANCE, **kwargs):
+        super().__init__(*args, ires=ires or START_IRES, **kwargs)
         self.max_ires = max(max_ires, self.ires)
         self.tolerance = tolerance
         self.ires_reached = self.ires
@@ -58,8 +70,8 @@ class ConvergedChiSquareTest(mi.chi2.ChiSquareTest):
         cells = np.arange(self.res.x * self.res.y, dtype=np.uint32)
         table = self._integrate(cells, self.ires)
         active, n = cells, self.ires
-        while active.size and n < self.max_ires:
-            n = min(2 * n, self.max_ires)
+        while active.size and 2 * n - 1 <= self.max_ires:
+            n = 2 * n - 1                  # the intervals halved: the old points kept
             finer = self._integrate(active, n)
             change = np.abs(finer - table[active])
             table[active] = finer

@@ -301,8 +301,8 @@ def cmd_validate(args: argparse.Namespace) -> int:
         if check["status"] == "fail":
             print(f"FAIL {check['id']}: {check['measured']}")
     print(f"report: {os.path.join(args.output, 'index.html')} ({results['seconds']:.0f} s); "
-          f"{s['pass']} checks pass, {s['known']} documented known limitations, "
-          f"{s['fail']} fail")
+          f"{s['pass']} checks pass, {s['documented']} documented behaviour, "
+          f"{s['known']} documented known limitations, {s['fail']} fail")
     return 1 if s["fail"] else 0
 
 

@@ -100,11 +100,11 @@ class Scanline:
         ray = mi.Ray3f(ray)
         active = mi.Bool(active)
         if not see_through(scene):
-            result = self.shade(scene, sampler, ray, active, layers=False)[0]
+            result = self.shade(scene, sampler, ray, active, through=False)[0]
         else:
             # ---------------- Through the see-through surfaces ----------------
             def body(sampler, ray, result, β, layer, active):
-                L, si, bsdf, hit = self.shade(scene, sampler, ray, active, layers=True)
+                L, si, bsdf, hit = self.shade(scene, sampler, ray, active, through=True)
                 result = result + β * L
                 β = β * null_transmission(bsdf, si, hit)
                 return (sampler, si.spawn_ray(ray.d), result, β, layer + 1,
@@ -117,10 +117,10 @@ class Scanline:
             result = dr.fmin(dr.fmax(result, 0.0), 1.0)
         return result, mi.Bool(active), []
 
-    def shade(self, scene, sampler, ray, active, layers: bool):
+    def shade(self, scene, sampler, ray, active, through: bool):
         """The radiance the first surface along ``ray`` sends back (every
         light, the emitter seen), its interaction, BSDF and hit mask.
-        ``layers``: shadow rays cross see-through surfaces (else any surface
+        ``through``: shadow rays cross see-through surfaces (else any surface
         occludes)."""
         si = scene.ray_intersect(ray, active)
         result = mi.Spectrum(0.0)
@@ -137,7 +137,7 @@ class Scanline:
         for emitter in scene.emitters() if bsdf is not None else ():   # every light
             ds, radiance = emitter.sample_direction(si, sampler.next_2d(hit), hit)
             lit = hit & (ds.pdf > 0)
-            if self.shadows and layers:
+            if self.shadows and through:
                 radiance = radiance * transmittance(scene, si, ds, lit)
             elif self.shadows:
                 lit &= dr.select(scene.ray_test(si.spawn_ray_to(ds.p), lit), False, True)
@@ -164,8 +164,9 @@ def see_through(scene) -> bool:
     shape's BSDF flags (:mod:`.frozen`), so a change re-records."""
     for shape in scene.shapes():
         bsdf = shape.bsdf()
-        if shape.class_name() == "Instance" or (bsdf is not None
-                                   and mi.has_flag(bsdf.flags(), mi.BSDFFlags.Null)):
+        if shape.class_name() == "Instance":
+            return True
+        if bsdf is not None and mi.has_flag(bsdf.flags(), mi.BSDFFlags.Null):
             return True
     return False
 

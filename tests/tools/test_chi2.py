@@ -21,12 +21,16 @@ def chi2_of(cls, sampled, pdf, theta=0.0, **kwargs):
                sample_dim=3, sample_count=1_000_000, res=101, **kwargs)
 
 
-@pytest.mark.parametrize("config", [PHONG_1000, TOON_BAND], ids=["phong 1000", "toon band"])
-def test_sharp_lobes_pass_where_a_fixed_ires_fails(tmp_path, monkeypatch, config):
+@pytest.mark.parametrize("config, theta", [
+    (PHONG_1000, 0.0), (TOON_BAND, 0.0),
+    ({"type": "blinn", "exponent": 1000.0, "diffuse_reflectance": 0.0}, 85.0),
+    ({"type": "ward", "alpha": 0.05, "diffuse_reflectance": 0.0}, 85.0),
+], ids=["phong 1000", "toon band", "blinn 1000 at 85", "ward 0.05 at 85"])
+def test_sharp_lobes_pass_where_a_fixed_ires_fails(tmp_path, monkeypatch, config, theta):
     monkeypatch.chdir(tmp_path)                    # a rejected test writes chi2_data.py
-    fixed = chi2_of(mi.chi2.ChiSquareTest, config, config, ires=16)
+    fixed = chi2_of(mi.chi2.ChiSquareTest, config, config, theta, ires=16)
     assert not fixed.run(0.01, quiet=True)         # the integration error, not the sampler
-    converged = chi2_of(ConvergedChiSquareTest, config, config)
+    converged = chi2_of(ConvergedChiSquareTest, config, config, theta)
     assert converged.run(0.01, quiet=True), converged.messages
     assert converged.ires_reached >= 64 and converged.unconverged == 0
 

@@ -13,9 +13,10 @@ makes sense (consistency, extremes), one with a ``mode`` as given. Colours are
 white (1) where energy is measured, so the albedo is the fraction of light
 reflected.
 
-``mi-brdfs validate`` shows the first configurations of :data:`FURNACE`,
-:data:`CHI2` and :data:`LOBES`; ``mi-brdfs bench`` runs :func:`bench_models`
-and the ``BENCH_*`` configurations at the end of this module.
+``mi-brdfs validate`` shows the configurations of :data:`FURNACE`,
+:func:`report_chi2` (every χ² test of the battery; the representative ones
+with ``--quick``), :data:`NEGATIVE` and :data:`LOBES`; ``mi-brdfs bench`` runs
+:func:`bench_models` and the ``BENCH_*`` configurations at the end of this module.
 """
 from __future__ import annotations
 
@@ -42,6 +43,7 @@ class Chi2:
     ires: int = 16                 # pdf sub-samples per cell and axis (sharp lobes: more)
     res: int = 201
     phi: float = 0.0               # the viewer's azimuth
+    quick: bool = False            # in ``validate --quick``: representative of its model
 
 
 @dataclass(frozen=True)
@@ -144,7 +146,8 @@ def toon_ramp(colours, filter_type: str = "bilinear") -> dict:
 @builds("lambert")
 def _lambert(name: str) -> Entry:
     return Entry(
-        chi2=[Chi2({"type": "lambert", "mode": m}, (0, 85)) for m in ("hdr", "scanline")],
+        chi2=[Chi2({"type": "lambert", "mode": m}, (0, 85), quick=m == "hdr")
+              for m in ("hdr", "scanline")],
         consistency=[{"type": "lambert"},
                      {"type": "lambert", "mode": "scanline", "reflectance": rgb([1.7, 0.6, 0.2])}],
         furnace=[Furnace("m_D = 1", {"type": "lambert", "reflectance": 1.0}, lo=1.0, hi=1.0,
@@ -165,7 +168,7 @@ def _oren_nayar(name: str) -> Entry:
     on = {"type": "oren_nayar"}
     eon = {**on, "energy_compensation": True}
     return Entry(
-        chi2=[Chi2({**on, "sigma": s, "method": m}, res=101)
+        chi2=[Chi2({**on, "sigma": s, "method": m}, res=101, quick=s == 0.5)
               for s, m in [(0.0, "exact"), (0.5, "table"), (HALF_PI, "exact")]]
         + [Chi2({**on, "sigma": 1.0, "mode": "scanline", "reflectance": rgb([2.0, 0.5, 0.1])},
                 (60,), res=101),
@@ -225,7 +228,9 @@ def _toon(name: str) -> Entry:
     t = {"type": "toon"}
     chi2_configs = _toon_chi2_configs()
     return Entry(
-        chi2=[Chi2(c, (0, 30, 60, 85), ires=32) for c in chi2_configs],
+        chi2=[Chi2(c, (0, 30, 60, 85), ires=32,
+                   quick=c == {**t, "specular_model": "phong"} or "diffuse_ramp" in c)
+              for c in chi2_configs],
         consistency=chi2_configs + [{**t, "specular_threshold": 1.0},
                                     {**t, "smoothness": 2.0, "specular_shade": 0.1}],
         furnace=[
@@ -265,7 +270,8 @@ def _toon(name: str) -> Entry:
 @builds("phong", "blinn")
 def _exponent_model(name: str) -> Entry:
     b = {"type": name}
-    chi2 = [Chi2({**b, "exponent": g, "diffuse_reflectance": m_d}, (0, 30, 60, 85), ires=64)
+    chi2 = [Chi2({**b, "exponent": g, "diffuse_reflectance": m_d}, (0, 30, 60, 85), ires=64,
+                 quick=(g, m_d) in ((100.0, 0.5), (1e3, 0.0)))
             for g in (0.0, 1.0, 10.0, 100.0, 1e3) for m_d in (0.0, 0.5)]
     chi2 += [Chi2({**b, "exponent": 1e4, "diffuse_reflectance": 0.0}, (30, 60, 85), ires=64),
              # scanline weights pick the lobes differently; coloured lobes
@@ -331,7 +337,8 @@ def _ward(name: str) -> Entry:
     w = {"type": "ward"}
     # viewers at azimuth 30°, not along t or b: the anisotropic lobe is asymmetric
     chi2 = [Chi2({**w, "alpha_u": at, "alpha_v": ab, "diffuse_reflectance": m_d},
-                 (0, 30, 60, 85), phi=30.0)
+                 (0, 30, 60, 85), phi=30.0,
+                 quick=(at, ab, m_d) in ((0.05, 0.3, 0.5), (0.05, 0.05, 0.0)))
             for at, ab in ((0.1, 0.1), (0.05, 0.3), (0.3, 0.05), (0.5, 0.5), (0.05, 0.05))
             for m_d in (0.0, 0.5)]
     chi2 += [Chi2({**w, "alpha_u": 0.15, "alpha_v": 0.04, "mode": "scanline",
@@ -390,7 +397,8 @@ def _ward(name: str) -> Entry:
 @builds("cook_torrance")
 def _cook_torrance(name: str) -> Entry:
     c = {"type": "cook_torrance"}
-    chi2 = [Chi2({**c, "distribution": d, "alpha": a, "k": k}, (0, 45, 85))
+    chi2 = [Chi2({**c, "distribution": d, "alpha": a, "k": k}, (0, 45, 85),
+                 quick=(d, a, k) in (("ggx", 0.1, 0.5), ("beckmann", 0.5, 0.0)))
             for d in DISTRIBUTIONS for a in (0.1, 0.5) for k in (0.0, 0.5)]
     chi2 += [
         # The Smith term and the scanline clamp change the weights, not the sampler.
@@ -482,7 +490,7 @@ def _cook_torrance(name: str) -> Entry:
 #  What the validation report shows
 # ----------------------------------------------------------------------------
 #
-# FURNACE, CHI2 and LOBES are derived from the entries on first use (module
+# FURNACE, NEGATIVE and LOBES are derived from the entries on first use (module
 # __getattr__ below): importing the catalog builds no entry.
 
 # White furnace: for each model, its first three uncompensated configurations
@@ -518,14 +526,29 @@ def _furnace() -> dict[str, list[tuple[str, dict]]]:
     return furnace
 
 
-def _chi2() -> dict[str, list[tuple[str, dict, tuple[float, ...]]]]:
-    """Sampling: (label, config, incident angles in degrees) per model."""
-    return {
-        name: [(", ".join(f"{k} = {v}" for k, v in c.config.items()
-                          if k != "type" and not isinstance(v, dict)) or "defaults",
-                c.config, tuple(c.thetas)) for c in entry.chi2]
-        for name, entry in ENTRIES.items()
-    }
+def label(config: dict) -> str:
+    """A configuration's parameters as one line (a texture by its type)."""
+    def shown(v):
+        if isinstance(v, dict):
+            return v["value"] if v.get("type") == "rgb" else v.get("type", "texture")
+        return v
+    return ", ".join(f"{k} = {shown(v)}" for k, v in config.items() if k != "type") or "defaults"
+
+
+def report_chi2(quick: bool = False) -> dict[str, list[tuple[str, Chi2]]]:
+    """The χ² tests of the validation report, (label, test) per model: every
+    one of the catalog (the battery's set), or with ``quick`` the ones marked
+    representative of their model (phong and blinn at γ = 100 and 1000, sharp
+    and anisotropic Ward lobes, ...)."""
+    return {name: [(label(c.config), c) for c in entry.chi2 if c.quick or not quick]
+            for name, entry in ENTRIES.items()}
+
+
+def _negative() -> dict[str, tuple[dict, dict, float, float]]:
+    """Negative controls of the χ² test: the sampler of one configuration
+    against the pdf of a slightly different one, which the test must reject."""
+    return {name: (*entry.negative, entry.extra.get("negative_phi", 0.0))
+            for name, entry in ENTRIES.items() if entry.negative}
 
 
 def _lobes() -> dict[str, dict]:
@@ -533,7 +556,7 @@ def _lobes() -> dict[str, dict]:
     return {name: entry(name).lobe or {"type": name} for name in BY_NAME}
 
 
-_DERIVED = {"FURNACE": _furnace, "CHI2": _chi2, "LOBES": _lobes}
+_DERIVED = {"FURNACE": _furnace, "NEGATIVE": _negative, "LOBES": _lobes}
 
 
 def __getattr__(name: str):

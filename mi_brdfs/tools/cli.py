@@ -157,9 +157,11 @@ def resolve_scene(arg: str) -> tuple[str, bool]:
         raise CLIError(f"scene {arg} is a folder; give an XML file or a bundled scene's name")
     if os.path.exists(arg):
         return arg, False
-    bundled = scenes.path(arg)
-    if bundled is not None and os.sep not in arg:
-        return str(bundled), True
+    if os.sep not in arg:
+        try:
+            return scenes.path(arg), True
+        except ValueError:
+            pass
     raise CLIError(f"scene not found: {arg} (not a file; bundled scenes: "
                    f"{', '.join(scenes.names())})")
 
@@ -224,7 +226,7 @@ def cmd_render(args: argparse.Namespace) -> int:
     import drjit as dr
     import mitsuba as mi
 
-    from ..render.passes import render_passes
+    from ..render.passes import render_passes, split_passes
 
     # parallel=False: scene loading with Python plugins in worker threads failed
     # intermittently here (bad_alloc, basic_string::_M_create); serial loading is cheap.
@@ -232,8 +234,9 @@ def cmd_render(args: argparse.Namespace) -> int:
     spp = check_render_numbers(scene, args, defines)
 
     log = info_logger(args.prog, args.verbose)
+    chunks = split_passes(spp, args.passes)        # the passes that run (none empty)
     width, height = scene.sensors()[0].film().crop_size()
-    log(f"{scene_path}: {width}x{height}, {spp} spp in {min(args.passes, spp)} passes, "
+    log(f"{scene_path}: {width}x{height}, {spp} spp in {len(chunks)} passes, "
         f"seed {args.seed}, "
         f"variant {variant}, {dr.thread_count()} threads")
     progress = Progress(args.prog, enabled=not args.quiet)
@@ -247,8 +250,8 @@ def cmd_render(args: argparse.Namespace) -> int:
         names = output.channel_names(film_channel_names(scene), image.shape[2])
     except Exception:                       # a film without a bitmap: generic names
         names = output.channel_names([], image.shape[2])
-    info = {"scene": os.path.abspath(scene_path), "spp": spp, "seed": args.seed,
-            "passes": args.passes, "variant": variant,
+    info = {"scene": os.path.abspath(scene_path), "spp": sum(chunks), "seed": args.seed,
+            "passes": len(chunks), "pass_spp": ",".join(map(str, chunks)), "variant": variant,
             "defines": " ".join(f"{k}={v}" for k, v in defines.items()),
             **versions()}
     for path in targets:
@@ -275,7 +278,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
     thresholds = {k: getattr(args, k) for k in compare.THRESHOLDS}
     results = compare.compare(args.reference, args.tests, args.output, thresholds,
                               compare.parse_region(args.crop), args.tonemap,
-                              flip_mode=args.flip, mask_nonfinite=args.mask_nonfinite)
+                              flip_mode=args.flip, mask_nonfinite=args.mask_nonfinite,
+                              layer=args.layer)
     for c in results:
         m = c.metrics
         print(f"{c.test_path}: rmse {m['rmse']:.4g}, relmse {m['relmse']:.4g}, "
@@ -297,8 +301,8 @@ def cmd_validate(args: argparse.Namespace) -> int:
         if check["status"] == "fail":
             print(f"FAIL {check['id']}: {check['measured']}")
     print(f"report: {os.path.join(args.output, 'index.html')} ({results['seconds']:.0f} s); "
-          f"{s['pass']} checks pass, {s['known']} documented known limitations, "
-          f"{s['fail']} fail")
+          f"{s['pass']} checks pass, {s['documented']} documented behaviour, "
+          f"{s['known']} documented known limitations, {s['fail']} fail")
     return 1 if s["fail"] else 0
 
 
@@ -389,6 +393,9 @@ def parser() -> Parser:
     c.add_argument("--crop", default=None, metavar="X,Y,W,H", help="compare this region only")
     c.add_argument("--tonemap", default="clamp", choices=list(tonemap.OPERATORS),
                    help="display tone mapping of the pictures")
+    c.add_argument("--layer", default=None, metavar="NAME",
+                   help="compare this layer of the EXR inputs (an AOV such as albedo or nn; "
+                        "default: the render's R, G, B, or Y in mono variants)")
     c.set_defaults(run=cmd_compare)
 
     v = sub.add_parser("validate", parents=[common()], help="run the project's validation; HTML report")

@@ -66,18 +66,19 @@ def names() -> list[str]:
 
 
 def select(wanted: list[str] | None) -> list[Model]:
-    """The models named (a model name, or a plugin name for all its models);
-    ValueError naming the unknown one and the valid names."""
+    """The models named: a model's name, or a plugin's name that is no model's
+    (``cook_torrance``, ``toon``: all its models); ValueError naming the
+    unknown one and the valid names."""
     models = all_models()
     if not wanted:
         return models
     chosen: list[Model] = []
     for w in wanted:
-        found = [m for m in models if m.name == w or m.plugin == w]
+        found = [m for m in models if m.name == w] or [m for m in models if m.plugin == w]
         if not found:
-            raise ValueError(f"unknown model {w!r}; valid: a plugin name "
-                             f"({', '.join(sorted({m.plugin for m in models}))}) or one of "
-                             f"{', '.join(m.name for m in models)}")
+            raise ValueError(f"unknown model {w!r}; valid: "
+                             f"{', '.join(m.name for m in models)}, or cook_torrance, toon "
+                             "(all their models)")
         chosen += [m for m in found if m not in chosen]
     return chosen
 

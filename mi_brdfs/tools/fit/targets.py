@@ -47,7 +47,7 @@ class Target:
         if self.xml is None:
             return mi.load_dict(self.as_dict())
         if self.folder:
-            resolver = mi.Thread.thread().file_resolver()
+            resolver = mi.file_resolver()
             if self.folder not in [str(p) for p in resolver]:
                 resolver.prepend(self.folder)
         obj = mi.load_string(self.xml)

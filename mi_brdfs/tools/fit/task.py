@@ -120,7 +120,7 @@ def fit_model(model, prob: Problem, settings: Settings, log=None) -> dict:
             opt[f.key] = (mi.Color3f(*map(float, unit[f.name])) if f.colour
                           else mi.Float(float(unit[f.name])))
         history = []
-        steps = max(1, settings.steps)
+        steps = settings.steps                  # 0: the start as it is (no descent)
         for it in range(steps):
             opt.set_learning_rate(learning_rate(settings, it / steps))
             for f in free:

@@ -31,11 +31,12 @@ __all__ = ["fit", "FULL", "QUICK", "Settings", "metric", "models", "targets"]
 def fit(specs: list[str], out_dir: str, model_names: list[str] | None = None,
         quick: bool = False, metric_name: str = "cosine", jobs: int = 1,
         scheduler: str | None = None, show=None, command: str = "mi-brdfs fit",
-        settings: Settings | None = None) -> list[dict]:
+        settings: Settings | None = None, also=None) -> list[dict]:
     """Fit every model to every target and write the report to ``out_dir``.
     Everything is checked before any fit starts: the report folder, the
     report dependencies, the models, the targets (each loaded once) and the
-    scheduler. Returns the records (see :mod:`.report`)."""
+    scheduler. ``also(folder, records)`` may add files to the report.
+    Returns the records (see :mod:`.report`)."""
     from .. import compare, outputs
     from . import report, sweep
 
@@ -54,6 +55,8 @@ def fit(specs: list[str], out_dir: str, model_names: list[str] | None = None,
     records = sweep.run(parsed, chosen, settings, jobs=jobs, scheduler=scheduler, show=show)
     with outputs.report_dir(out_dir, "fit", files) as tmp:
         report.write(tmp, records, settings, command)
+        if also:
+            also(tmp, records)
     for r in records:
         r.pop("images", None)
     return records

@@ -29,11 +29,11 @@ HOLD = 0.5                                  # the share of the steps at the full
 class Settings:
     """How much work one fit does (:data:`QUICK`, :data:`FULL`)."""
     metric: str = "cosine"
-    viewers: tuple[int, int] = (16, 8)       # viewer strata (cos θ, φ)
-    uniform: tuple[int, int] = (16, 16)      # uniform light strata per viewer
-    lobe: int = 64                           # mirror-guided lights per viewer and roughness
+    viewers: tuple[int, int] = (12, 6)       # viewer strata (cos θ, φ)
+    uniform: tuple[int, int] = (12, 12)      # uniform light strata per viewer
+    lobe: int = 36                           # mirror-guided lights per viewer and roughness
     starts: int = 3
-    steps: int = 300
+    steps: int = 250
     lr: float = 0.05
     lr_end: float = 1e-3
     res: int = 128                           # the standard scene

@@ -9,6 +9,9 @@ Mitsuba's own ``mitsuba`` command.
                     (see mi_brdfs/tools/compare.py; exit 0 pass, 3 a threshold failed)
     mi-brdfs validate -o REPORT_DIR [--quick]   (exit 1 when a check fails)
     mi-brdfs bench -o OUT_DIR [--quick] [--only GROUP]
+    mi-brdfs fit TARGET [TARGET ...] -o REPORT_DIR [--models NAME ...] [--quick]
+                 [--metric cosine|ngan] [-j N] [--scheduler ADDRESS]
+                    (see mi_brdfs/tools/fit; exit 1 when a fit fails)
     mi-brdfs --version
 
 ``render`` takes a scene file or the name of a bundled scene (``mi-brdfs
@@ -320,6 +323,26 @@ def cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_fit(args: argparse.Namespace) -> int:
+    from . import fit
+    from .fit import sweep
+
+    set_verbosity(args.verbose)
+    show = sweep.progress_printer(args.prog, enabled=not args.quiet, verbose=args.verbose > 0)
+    try:
+        records = fit.fit(args.targets, args.output, args.models, quick=args.quick,
+                          metric_name=args.metric, jobs=args.jobs, scheduler=args.scheduler,
+                          show=show, command=" ".join(["mi-brdfs", *sys.argv[1:]]))
+    finally:
+        show.close()
+    failed = [r for r in records if "error" in r]
+    for r in failed:
+        print(f"FAILED {r['target']} × {r['model']}: {r['error']}")
+    print(f"report: {fit.report_path(args.output)}; {len(records) - len(failed)} fits, "
+          f"{len(failed)} failed")
+    return 1 if failed else 0
+
+
 # ----------------------------------------------------------------------------
 #  The parser
 # ----------------------------------------------------------------------------
@@ -413,6 +436,26 @@ def parser() -> Parser:
     b.add_argument("--only", default=None, help="comma-separated groups (default: all)")
     b.add_argument("--cache", default=None, help="reference cache (default ~/.cache/mi_brdfs)")
     b.set_defaults(run=cmd_bench)
+
+    f = sub.add_parser("fit", parents=[common(threads=False)],
+                       help="fit every course model to BSDFs: error, images, cost; HTML report")
+    f.add_argument("targets", nargs="+", metavar="TARGET",
+                   help="an XML file holding a <bsdf>, or PLUGIN:key=value,... "
+                        "(e.g. roughconductor:material=Au,alpha=0.3)")
+    f.add_argument("-o", "--output", required=True,
+                   help="report folder: new, empty, or a previous report")
+    f.add_argument("--models", nargs="+", default=None, metavar="NAME",
+                   help="models to fit: names (e.g. cook_torrance/ggx/smith, phong+ec) or plugin "
+                        "names (default: every model)")
+    f.add_argument("--quick", action="store_true", help="fewer directions, steps and pixels (CI)")
+    f.add_argument("--metric", default="cosine", choices=("cosine", "ngan"),
+                   help="the BRDF-space metric (default cosine; ngan: Ngan et al. 2005)")
+    f.add_argument("-j", "--jobs", type=integer(1, 1024), default=1,
+                   help="local worker processes (default 1: the steadiest cost ratios)")
+    f.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="run on this Dask distributed scheduler (e.g. tcp://host:8786) "
+                        "instead of local processes")
+    f.set_defaults(run=cmd_fit)
     for name, command in sub.choices.items():
         command.set_defaults(prog=command.prog)
     return p

@@ -2,7 +2,11 @@
 GPU exists): every plugin loads, evaluates and samples finite, non-negative
 values and passes one χ² test of its sampler; scalar_rgb gives llvm_ad_rgb's
 values; polarized variants get depolarizers; ``mi-brdfs render -m scalar_rgb``
-works. One subprocess per variant: a variant switch is global to a process.
+works. In every variant, every parameter takes every property form Mitsuba's
+own plugins take, as they read it (``lambert`` with a <spectrum> is ``diffuse``
+with it), and direct calls take what Mitsuba's bindings take (lists, tuples;
+attributes), and every parameter can be written through mi.traverse.
+One subprocess per variant: a variant switch is global to a process.
 
 Scalar variants have no vectorised χ² in Mitsuba (mi.chi2 needs JIT arrays), so
 there a small χ² of the same kind runs sample() and pdf() lane by lane: the
@@ -13,6 +17,7 @@ Its significance is part of the suite-wide Šidák correction (support).
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -29,7 +34,11 @@ import mi_brdfs, mitsuba as mi, drjit as dr
 from scipy import stats
 
 variant, alpha, test_count = sys.argv[1], float(sys.argv[2]), int(sys.argv[3])
-cases = json.loads(sys.argv[4])
+cases, folder = json.loads(sys.argv[4]), sys.argv[6]
+sys.path.insert(0, sys.argv[5])                 # the tests' support module
+from support import (direct_call_failures, lambert_diffuse_difference, property_form_failures,
+                     update_failures)
+from mi_brdfs.tools.catalog import ENTRIES
 rng = np.random.default_rng(7)
 N = 64
 v = rng.normal(size=(N, 3)); v /= np.linalg.norm(v, axis=1, keepdims=True); v[:, 2] = np.abs(v[:, 2])
@@ -123,24 +132,48 @@ for config, theta in cases:
             p = scalar_chi2(bsdf, theta)
             r["chi2"] = p > 1 - (1 - alpha) ** (1 / test_count)     # Šidák, as Mitsuba's
             r["p"] = p
+    if variant != "llvm_ad_rgb":       # (the battery's variant runs them itself)
+        r["forms"] = property_form_failures(config["type"], folder)
+        r["calls"] = direct_call_failures(config)
+    r["update"] = update_failures(ENTRIES[config["type"]].interior[0])
     results[config["type"]] = r
+checks = {}
+if variant != "llvm_ad_rgb":
+    checks["lambert vs diffuse"] = lambert_diffuse_difference(folder)
 if variant == "scalar_rgb":            # the same values as llvm_ad_rgb
     mi.set_variant("llvm_ad_rgb")
     mi_brdfs.register()
     for config, _ in cases:
         results[config["type"]]["llvm"] = lanes(mi.load_dict(config))
-print("RESULTS " + json.dumps(results))
+print("RESULTS " + json.dumps({"plugins": results, "checks": checks}))
 '''
 
 
-def run_variant(variant: str) -> dict:
+def run_variant(variant: str, folder) -> tuple[dict, dict]:
+    """({plugin: its results}, {check: result}) of the script in ``variant``."""
     cases = variant_chi2_cases()
     run = subprocess.run([sys.executable, "-c", SCRIPT, variant, str(CHI2_ALPHA),
-                          str(chi2_test_count()), json.dumps(cases)],
+                          str(chi2_test_count()), json.dumps(cases),
+                          str(Path(__file__).parent), str(folder)],
                          capture_output=True, text=True, timeout=900)
     assert run.returncode == 0, run.stderr[-3000:]
     line = next(line for line in run.stdout.splitlines() if line.startswith("RESULTS "))
-    return json.loads(line[len("RESULTS "):])
+    results = json.loads(line[len("RESULTS "):])
+    return results["plugins"], results["checks"]
+
+
+def check_scenes_and_calls(variant: str, results: dict, checks: dict) -> None:
+    """Every parameter written through traverse; every property form, direct
+    calls, and lambert = diffuse for the same <spectrum> and <rgb> to float
+    precision (in llvm_ad_rgb: the battery and test_lambert check those)."""
+    for name, r in results.items():
+        assert not r["update"], f"{name} in {variant}:\n" + "\n".join(r["update"])
+    if variant == "llvm_ad_rgb":
+        return
+    for name, r in results.items():
+        assert not r["forms"], f"{name} in {variant}:\n" + "\n".join(r["forms"])
+        assert not r["calls"], f"{name} in {variant}:\n" + "\n".join(r["calls"])
+    assert checks["lambert vs diffuse"] < 1e-6, checks["lambert vs diffuse"]
 
 
 def check_lanes(lanes: dict) -> None:
@@ -154,9 +187,10 @@ def check_lanes(lanes: dict) -> None:
 
 @pytest.mark.slow
 @pytest.mark.parametrize("variant", CPU_VARIANTS + GPU_VARIANTS)
-def test_every_plugin_in_every_variant(variant):
-    results = run_variant(variant)
+def test_every_plugin_in_every_variant(variant, tmp_path):
+    results, checks = run_variant(variant, tmp_path)
     assert set(results) == {c[0]["type"] for c in variant_chi2_cases()}
+    check_scenes_and_calls(variant, results, checks)
     for name, r in results.items():
         check_lanes(r["lanes"])
         assert r["chi2"], f"{name}: χ² rejected its sampler in {variant} (p = {r.get('p')})"
@@ -168,11 +202,14 @@ def test_every_plugin_in_every_variant(variant):
 
 
 @pytest.mark.parametrize("variant", POLARIZED)
-def test_polarized_variants_get_depolarizers(variant):
+def test_polarized_variants_get_depolarizers(variant, tmp_path):
     """eval and the sample weight are Mueller matrices with one non-zero entry,
-    the unpolarized value (the script asserts it lane by lane)."""
-    for name, r in run_variant(variant).items():
+    the unpolarized value (the script asserts it lane by lane); every property
+    form and direct call as in the other variants."""
+    results, checks = run_variant(variant, tmp_path)
+    for name, r in results.items():
         check_lanes(r["lanes"])
+    check_scenes_and_calls(variant, results, checks)
 
 
 def test_render_in_scalar_rgb(tmp_path):

@@ -250,7 +250,7 @@ def property_form_failures(plugin: str, folder) -> list[str]:
 
 
 # ----------------------------------------------------------------------------
-#  Direct calls and updates (every variant, one lane at a time)
+#  Direct calls, updates, degenerate inputs (every variant, one lane at a time)
 # ----------------------------------------------------------------------------
 
 def interaction(wi) -> mi.SurfaceInteraction3f:
@@ -377,6 +377,70 @@ def update_failures(config: dict) -> list[str]:
             if not np.allclose(a[key], b[key], rtol=1e-5, atol=1e-7):
                 failures.append(f"{key} after update: {a[key].ravel()} != {b[key].ravel()}")
     return failures
+
+
+# Degenerate inputs: viewers at the normal, oblique, on the horizon (along s
+# and t), 1e-30 above it, below, and the zero vector; lights opposite the
+# viewer (the half vector 0), the zero vector, on the horizon and mirrored;
+# samples at the corners and edges of the unit square.
+DEGENERATE_VIEWERS = [(0, 0, 1), (0.6, 0, 0.8), (1, 0, 0), (0, 1, 0), (1, 0, 1e-30),
+                      (0, 0, -1), (0, 0, 0)]
+DEGENERATE_SAMPLES = [(s1, s2) for s1 in (0.0, 1.0)
+                      for s2 in ((0, 0), (0, 1), (1, 0), (1, 1), (0.5, 1), (1, 0.5), (0.5, 0))]
+
+
+def degenerate_inputs() -> list[tuple]:
+    """(wi, wo, sample1, sample2): each viewer against each light (-wi, 0, the
+    horizon along s and t, the mirror direction), and the first three viewers
+    against -wi with every sample of :data:`DEGENERATE_SAMPLES`."""
+    inputs = []
+    for i, wi in enumerate(DEGENERATE_VIEWERS):
+        x, y, z = wi
+        lights = [(-x, -y, -z), (0, 0, 0), (1, 0, 0), (0, -1, 0), (-x, -y, z)]
+        inputs += [(wi, wo) + DEGENERATE_SAMPLES[(5 * i + k) % len(DEGENERATE_SAMPLES)]
+                   for k, wo in enumerate(lights)]
+        if i < 3:
+            inputs += [(wi, lights[0], s1, s2) for s1, s2 in DEGENERATE_SAMPLES]
+    return inputs
+
+
+def degenerate_configs() -> list[dict]:
+    """Every plugin in both modes, every microfacet distribution and geometry,
+    both microfacet samplers, energy compensation, and the models' options."""
+    from mi_brdfs.bsdfs import BY_NAME
+    from mi_brdfs.bsdfs.microfacet import DISTRIBUTIONS, GEOMETRIES
+    ct = {"type": "cook_torrance", "k": 0.2}
+    return ([{"type": name, "mode": mode} for name in BY_NAME for mode in ("hdr", "scanline")]
+            + [{**ct, "distribution": d, "geometry": g, "sample_visible": v}
+               for d in DISTRIBUTIONS for g in GEOMETRIES for v in (True, False)
+               if v or (d != "blinn" and g == "smith")]
+            + [{"type": name, "energy_compensation": True}
+               for name, cls in BY_NAME.items() if cls.compensable]
+            + [{"type": "ward", "alpha_u": 0.05, "alpha_v": 0.3, "formula": "angles"},
+               {"type": "toon", "specular_model": "blinn", "smoothness": 0.2},
+               {"type": "oren_nayar", "method": "table"}])
+
+
+def degenerate_lanes(bsdf) -> dict[str, list]:
+    """:func:`outputs` at every :func:`degenerate_inputs`, lane by lane (one
+    call each in scalar variants, one vectorised call in JIT ones): {output:
+    [values of each lane]}, and "errors": the exceptions raised, as text."""
+    inputs = degenerate_inputs()
+    wi, wo, s1, s2 = (np.array([i[k] for i in inputs], dtype=np.float64) for k in range(4))
+    if dr.is_jit_v(mi.Float):
+        values = outputs(bsdf, interaction(wi), vec(wo), floats(s1), points(s2[:, 0], s2[:, 1]))
+        return {"errors": [], **{k: v.T.tolist() for k, v in values.items()}}
+    out: dict[str, list] = {"errors": []}
+    for k in range(len(inputs)):
+        try:
+            values = outputs(bsdf, interaction(wi[k]), mi.Vector3f(*map(float, wo[k])),
+                             float(s1[k]), mi.Point2f(*map(float, s2[k])))
+        except Exception as e:
+            out["errors"].append(f"{inputs[k]}: {type(e).__name__}: {e}")
+            continue
+        for key, value in values.items():
+            out.setdefault(key, []).append(value[:, 0].tolist())
+    return out
 
 
 # ----------------------------------------------------------------------------

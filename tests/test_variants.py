@@ -5,7 +5,8 @@ values; polarized variants get depolarizers; ``mi-brdfs render -m scalar_rgb``
 works. In every variant, every parameter takes every property form Mitsuba's
 own plugins take, as they read it (``lambert`` with a <spectrum> is ``diffuse``
 with it), and direct calls take what Mitsuba's bindings take (lists, tuples;
-attributes), and every parameter can be written through mi.traverse.
+attributes). In scalar_rgb no degenerate input raises, and every value
+llvm_ad_rgb gives 0 for is 0 (a plane lit from straight below renders black).
 One subprocess per variant: a variant switch is global to a process.
 
 Scalar variants have no vectorised χ² in Mitsuba (mi.chi2 needs JIT arrays), so
@@ -23,7 +24,7 @@ import numpy as np
 import pytest
 
 from support import (CHI2_ALPHA, CPU_VARIANTS, GPU_VARIANTS, chi2_test_count,
-                     variant_chi2_cases)
+                     degenerate_configs, degenerate_inputs, variant_chi2_cases)
 
 POLARIZED = ["scalar_spectral_polarized", "llvm_ad_mono_polarized", "llvm_ad_spectral_polarized"]
 
@@ -36,8 +37,8 @@ from scipy import stats
 variant, alpha, test_count = sys.argv[1], float(sys.argv[2]), int(sys.argv[3])
 cases, folder = json.loads(sys.argv[4]), sys.argv[6]
 sys.path.insert(0, sys.argv[5])                 # the tests' support module
-from support import (direct_call_failures, lambert_diffuse_difference, property_form_failures,
-                     update_failures)
+from support import (degenerate_configs, degenerate_lanes, direct_call_failures,
+                     lambert_diffuse_difference, property_form_failures, update_failures)
 from mi_brdfs.tools.catalog import ENTRIES
 rng = np.random.default_rng(7)
 N = 64
@@ -119,9 +120,8 @@ def jit_chi2(config, theta):
 
 
 results = {}
-if variant != "scalar_rgb":
-    mi.set_variant(variant)
-    mi_brdfs.register()
+mi.set_variant(variant)
+mi_brdfs.register()
 for config, theta in cases:
     bsdf = mi.load_dict(config)
     r = {"lanes": lanes(bsdf)}
@@ -140,11 +140,23 @@ for config, theta in cases:
 checks = {}
 if variant != "llvm_ad_rgb":
     checks["lambert vs diffuse"] = lambert_diffuse_difference(folder)
+if variant == "scalar_rgb":
+    checks["degenerate"] = [degenerate_lanes(mi.load_dict(c)) for c in degenerate_configs()]
+    # a plane seen straight on (orthographic: every viewer exactly at the
+    # normal), lit from straight behind: wo = -wi, the half vector 0
+    scene = mi.load_dict({
+        "type": "scene", "integrator": {"type": "path", "max_depth": 2},
+        "sensor": {"type": "orthographic", "film": {"type": "hdrfilm", "width": 2, "height": 2}},
+        "plane": {"type": "rectangle", "bsdf": {"type": "cook_torrance", "distribution": "ggx"},
+                  "to_world": mi.ScalarTransform4f().translate([0, 0, 1]).scale([1, -1, -1])},
+        "light": {"type": "directional", "direction": [0, 0, -1]}})
+    checks["lit from below"] = np.array(mi.render(scene), dtype=np.float64).ravel().tolist()
 if variant == "scalar_rgb":            # the same values as llvm_ad_rgb
     mi.set_variant("llvm_ad_rgb")
     mi_brdfs.register()
     for config, _ in cases:
         results[config["type"]]["llvm"] = lanes(mi.load_dict(config))
+    checks["degenerate llvm"] = [degenerate_lanes(mi.load_dict(c)) for c in degenerate_configs()]
 print("RESULTS " + json.dumps({"plugins": results, "checks": checks}))
 '''
 
@@ -176,6 +188,24 @@ def check_scenes_and_calls(variant: str, results: dict, checks: dict) -> None:
     assert checks["lambert vs diffuse"] < 1e-6, checks["lambert vs diffuse"]
 
 
+def check_degenerate(checks: dict) -> None:
+    """scalar_rgb at degenerate inputs: nothing raises, every value is finite
+    and non-negative (directions aside), and 0 wherever llvm_ad_rgb gives 0."""
+    for config, scalar, llvm in zip(degenerate_configs(), checks["degenerate"],
+                                    checks["degenerate llvm"]):
+        assert not scalar["errors"], f"{config}: " + "\n".join(scalar["errors"][:5])
+        for key, values in scalar.items():
+            if key == "errors":
+                continue
+            s, j = np.array(values), np.array(llvm[key])
+            assert np.isfinite(s).all() and (key == "sample wo" or (s >= 0).all()), (config, key)
+            lanes = np.flatnonzero(((j == 0) & (s != 0)).any(axis=1))
+            assert not lanes.size, (f"{config} {key}: 0 in llvm_ad_rgb, not in scalar_rgb at "
+                                    f"{[degenerate_inputs()[k] for k in lanes[:3]]}")
+    image = np.array(checks["lit from below"])
+    assert np.isfinite(image).all() and (image == 0).all()
+
+
 def check_lanes(lanes: dict) -> None:
     for key in ("eval", "pdf", "spdf", "weight"):
         a = np.array(lanes[key], dtype=np.float64)
@@ -191,6 +221,8 @@ def test_every_plugin_in_every_variant(variant, tmp_path):
     results, checks = run_variant(variant, tmp_path)
     assert set(results) == {c[0]["type"] for c in variant_chi2_cases()}
     check_scenes_and_calls(variant, results, checks)
+    if variant == "scalar_rgb":
+        check_degenerate(checks)
     for name, r in results.items():
         check_lanes(r["lanes"])
         assert r["chi2"], f"{name}: χ² rejected its sampler in {variant} (p = {r.get('p')})"

@@ -85,10 +85,11 @@ class ParameterError(ValueError):
 class Param:
     """One plugin parameter: how it is read, checked, exposed and tested.
 
-    ``kind``: ``"spectrum"`` (float, rgb or any texture, evaluated per colour
-    channel), ``"scalar"`` (float or texture, evaluated as one value, e.g. a
-    roughness) or ``"float"`` (a plain number, an opaque Float; its traverse
-    key is the bare name). ``role``: ``"colour"`` and ``"weight"`` scale a lobe
+    ``kind``: ``"spectrum"`` (any form Mitsuba's own colours take: float, rgb,
+    spectrum, texture; evaluated per colour channel), ``"scalar"`` (the same
+    forms, evaluated as one value, e.g. a roughness) or ``"float"`` (a plain
+    number: an opaque Float, a float in a writable box in scalar variants; its
+    traverse key is the bare name). ``role``: ``"colour"`` and ``"weight"`` scale a lobe
     (their gradients are checked at their bounds too), ``"shape"`` shapes it.
     ``upper`` is the upper end of the range the tests probe when ``hi`` is
     unbounded (colours: 1, a white surface).

@@ -200,7 +200,7 @@ def property_form_failures(plugin: str, folder) -> list[str]:
     plain number; in spectral variants a wavelength-dependent spectrum or a
     3-channel bitmap for a scalar, which have no single value there) is
     refused with the one-line error. Wrong types (<string>, <boolean>) and
-    out-of-range spectrum values are refused with one line. Returns the
+    values out of range in a spectrum or a texture are refused with one line. Returns the
     failures, one line each (empty: all as expected)."""
     from mi_brdfs.bsdfs import BY_NAME
     forms, failures = property_forms(folder), []
@@ -246,6 +246,8 @@ def property_form_failures(plugin: str, folder) -> list[str]:
         if p.kind != "float":
             bad = p.lo - 0.5 if p.lo is not None else p.hi + 0.5
             refused(p, f'<spectrum name="NAME" value="400:0.5, 700:{bad:g}"/>', repr(bad))
+            refused(p, '<texture type="checkerboard" name="NAME"><float name="color0" '
+                    f'value="0.5"/><float name="color1" value="{bad:g}"/></texture>', repr(bad))
     return failures
 
 

@@ -15,7 +15,10 @@ parameter declarations (``PARAMS``, ``OPTIONS``):
    and weights also at their bounds (one-sided);
 8. bad values refused with one line (plugin, parameter, value, valid range) at
    load time and at ``params.update()``; bad options too;
-9. traverse and update; a lobe is dropped only when it cannot matter.
+9. traverse and update; a lobe is dropped only when it cannot matter;
+10. every property form a Mitsuba scene gives a parameter, read as Mitsuba's
+    own plugins read it, and direct calls as Mitsuba's bindings take them
+    (the other variants: tests/test_variants.py).
 
 A model's own module keeps only its independent transcription of the lecture
 and what is particular to it.
@@ -41,8 +44,9 @@ from mi_brdfs.bsdfs.base import ParameterError
 from mi_brdfs.tools import catalog
 from mi_brdfs.tools.catalog import ENTRIES
 from support import (CHI2_ALPHA, BrokenEntry, albedo, assert_refused, chi2_test, chi2_test_count,
-                     config_id, evaluate, error_line, finite, finite_difference, floats, points,
-                     f32, mirror_pairs, random_hemisphere, surface, vec)
+                     config_id, direct_call_failures, evaluate, error_line, finite,
+                     finite_difference, floats, points, f32, mirror_pairs,
+                     property_form_failures, random_hemisphere, surface, vec)
 
 PLUGINS = BY_NAME
 MODES = ("hdr", "scanline")
@@ -556,3 +560,27 @@ def test_a_lobe_is_dropped_only_when_it_cannot_matter(name):
             tex = {"type": "checkerboard", "color0": value, "color1": value}
             assert mi.load_dict({"type": name, p.name: tex}).flags() == default, \
                 f"{where} as a texture: lobe dropped"
+
+
+# ----------------------------------------------------------------------------
+#  10. Every property form, every direct call
+# ----------------------------------------------------------------------------
+
+@pytest.mark.parametrize("name", PLUGINS)
+def test_every_property_form(name, tmp_path):
+    """Each parameter as <float>, <integer>, <rgb>, <spectrum> (a constant,
+    wavelength:value pairs, a file), a bitmap and a reference by id: a colour
+    or scalar holds what Mitsuba's diffuse holds for the same element; a
+    plain number takes numbers only; wrong types and spectrum values out of
+    range are refused with one line (support.property_form_failures)."""
+    failures = property_form_failures(name, tmp_path)
+    assert not failures, "\n".join(failures)
+
+
+@pytest.mark.parametrize("name", PLUGINS)
+def test_direct_calls_as_mitsuba_takes_them(name):
+    """Lists and tuples for wo and sample2 (as Mitsuba's bindings take them
+    for its own plugins); has_attribute and eval_attribute* as for diffuse."""
+    failures = direct_call_failures({"type": name})
+    assert not failures, "\n".join(failures)
+

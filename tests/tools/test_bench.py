@@ -219,6 +219,20 @@ def test_every_group_has_its_finding_and_plots(results, tmp_path):
         assert group.about, f"{name}: its runner says what it measures"
 
 
+def test_trade_fits_into_a_subfolder_the_marker_lists(results):
+    """The trade group runs mi-brdfs fit (quick: one material, two models) into
+    trade/, a fit report of its own, and the bench's marker lists its files."""
+    out, r, _ = results
+    rows = r["groups"]["trade"]
+    assert {row["model"] for row in rows} == set(bench.QUICK.trade_models)
+    assert all(not row["failed"] and 0 <= row["brdf_error"] <= 1.5 for row in rows)
+    fits = json.loads((out / "trade" / "fits.json").read_text())
+    assert [f["model"] for f in fits] == [row["model"] for row in rows]
+    listed = json.loads((out / ".mi-brdfs-report").read_text())["files"]
+    assert "trade/fits.json" in listed and "trade/index.html" in listed
+    assert all((out / name).is_file() for name in listed)
+
+
 # ----------------------------------------------------------------------------
 #  The report folder, the dependencies: refused before any work
 # ----------------------------------------------------------------------------

@@ -77,7 +77,8 @@ def run(out_dir: str, quick: bool = False, only: list[str] | None = None,
         for name in names:
             log(f"bench: {name} ...")
             group_start = time.perf_counter()
-            results["groups"][name] = GROUPS[name].run(settings, refs)
+            group = GROUPS[name]
+            results["groups"][name] = group.run(settings, refs, *([tmp] if group.writes else []))
             results["group_seconds"][name] = time.perf_counter() - group_start
         results["seconds"] = time.perf_counter() - start
         groups = [(GROUPS[name], rows) for name, rows in results["groups"].items() if rows]

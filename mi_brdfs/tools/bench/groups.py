@@ -9,6 +9,7 @@ shows it above the group's table.
 """
 from __future__ import annotations
 
+import os
 import statistics
 import time
 from dataclasses import dataclass
@@ -18,7 +19,7 @@ import numpy as np
 
 from .. import catalog
 from . import plots, report
-from .measure import Settings, References, efficiency, image, relmse, scene_dict, timed
+from .measure import FULL, Settings, References, efficiency, image, relmse, scene_dict, timed
 from .workers import in_subprocess
 
 
@@ -272,6 +273,23 @@ def tracing(s: Settings, refs: References) -> list[dict]:
     return in_subprocess("tracing", lanes=1024, calls=25 * s.repeats)["rows"]
 
 
+def trade(s: Settings, refs: References, out_dir: str) -> list[dict]:
+    """Which course model for which material: every model fitted by mi-brdfs fit
+    to the fixed materials of mi_brdfs.tools.fit.trade (gold, copper, aluminium,
+    plastic, principled, diffuse), its BRDF error, its image error in the
+    standard scene and its render cost against the material's own plugin; the
+    fit report, with its Pareto plots, renders and each fit as XML, is in the
+    folder trade/."""
+    from ..fit import trade as sweep
+    targets = sweep.TARGETS[:s.trade_targets or None]
+    labels = {spec: label for label, spec in targets}
+    records = sweep.run(os.path.join(out_dir, "trade"), quick=s is not FULL, targets=targets,
+                        models=list(s.trade_models) or None, show=lambda *a: None)
+    keys = ("model", "brdf_error", "image_relmse", "image_flip", "cost_ratio", "seconds")
+    return [{"material": labels[r["target"]], **{k: r.get(k) for k in keys},
+             "failed": r.get("error", "")} for r in records]
+
+
 # ----------------------------------------------------------------------------
 #  Every group, in the order they run
 # ----------------------------------------------------------------------------
@@ -279,9 +297,10 @@ def tracing(s: Settings, refs: References) -> list[dict]:
 @dataclass(frozen=True)
 class Group:
     name: str
-    run: Callable[[Settings, References], list[dict]]
+    run: Callable[..., list[dict]]                                # (settings, references)
     finding: Callable[[list[dict]], str | None] | None = None    # report.py
     plots: Callable[[list[dict]], dict] | None = None             # plots.py
+    writes: bool = False      # run() also writes files: it gets out_dir, the report folder
 
     @property
     def about(self) -> str:
@@ -303,4 +322,5 @@ GROUPS: dict[str, Group] = {g.name: g for g in [
     Group("frozen", frozen, report.frozen, plots.frozen),
     Group("kernels", kernels, report.kernels, plots.kernels),
     Group("tracing", tracing, report.tracing, plots.tracing),
+    Group("trade", trade, report.trade, writes=True),
 ]}

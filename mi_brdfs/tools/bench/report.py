@@ -151,6 +151,28 @@ def tracing(rows: list[dict]) -> str:
             f"{r['sample']['microfacet_objects']} MicrofacetDistribution objects.")
 
 
+def trade(rows: list[dict]) -> str | None:
+    """The best model per material (lowest BRDF error) and the cheapest model
+    within 0.05 of it, with their render cost against the material's plugin."""
+    done = [r for r in rows if not r["failed"]]
+    if not done:
+        return None
+    parts = []
+    for material in dict.fromkeys(r["material"] for r in done):
+        mine = [r for r in done if r["material"] == material]
+        best = min(mine, key=lambda r: r["brdf_error"])
+        close = [r for r in mine if r["brdf_error"] <= best["brdf_error"] + 0.05]
+        cheap = min(close, key=lambda r: r["cost_ratio"])
+        part = f"{material}: {best['model']} ({best['brdf_error']:.3f}, cost {best['cost_ratio']:.2f}x)"
+        if cheap is not best:
+            part += (f", or {cheap['model']} ({cheap['brdf_error']:.3f}, "
+                     f"cost {cheap['cost_ratio']:.2f}x)")
+        parts.append(part)
+    return ("Which model for which material (BRDF error, 0 = identical, 1 = black; render "
+            "cost against the material's own plugin): " + "; ".join(parts) + ". The fit "
+            "report with every model's error, renders and XML is in trade/index.html.")
+
+
 # ----------------------------------------------------------------------------
 #  The files
 # ----------------------------------------------------------------------------

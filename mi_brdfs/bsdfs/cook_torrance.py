@@ -106,7 +106,7 @@ import drjit as dr
 import mitsuba as mi
 
 from . import energy, lambert, microfacet as mf
-from .base import BRDF, Option, Param, Reader, mean
+from .base import BRDF, Option, Param, Reader, Scaled, mean
 from .grid import Axis
 
 
@@ -116,8 +116,9 @@ from .grid import Axis
 
 def lobe(wi, wo, alpha, distribution: str, f0=None, geometry: str = "smith",
          visible: bool = True, value: bool = True, pdf: bool = True):
-    """(specular value, sampling density) at wo, either None when not asked
-    for; the two share the half vector, D and G1(w_r)/cos θ_r.
+    """(specular value, sampling density, their ratio) at wo: each None when not
+    asked for (the ratio is known in closed form for Smith's G with visible
+    normals only); they share the half vector, D and G1(w_r)/cos θ_r.
 
     The value is D·F·G / (4 (w_r·n)), the same in both modes (the lecture's
     scanline f_specular is m_S·D F G / (4 clamp(w_r·n)); the hdr BRDF
@@ -127,31 +128,38 @@ def lobe(wi, wo, alpha, distribution: str, f0=None, geometry: str = "smith",
     grazing mirror pair, stopped at cos = ``COS_FLOOR`` (1e-12).
 
     The density is that of :func:`sample_lobe`: pdf(m) / (4 wo·m), m the half
-    vector, pdf(m) the visible normals' G1(w_r)/cos θ_r · max(0, w_r·m) D(m)
-    or the full distribution's D(m) cos θ_m.
+    vector, pdf(m) the visible normals' G1(w_r)/cos θ_r · (w_r·m) D(m), where
+    w_r·m = wo·m cancels (D(m) G1(w_r)/(4 cos θ_r), as Heitz 2018), or the full
+    distribution's D(m) cos θ_m. The ratio value / density of visible normals
+    with Smith's G is F·G1(d) (no D, no division: bounded by 1).
     """
     h = mf.half_vector(wi, wo)
     d = mf.D[distribution](h, alpha)
     visible = visible and distribution != "blinn"
-    g1_i = mf.G1_OVER_COS[distribution](wi, alpha) \
-        if (value and geometry == "smith") or (pdf and visible) else None
-    f = p = None
+    smith = geometry == "smith"
+    g1_i = mf.G1_OVER_COS[distribution](wi, alpha) if (value and smith) or (pdf and visible) \
+        else None
+    f = p = ratio = None
     if value:
-        fresnel = mf.fresnel_schlick(f0, dr.dot(wi, h))
-        if geometry == "smith":
-            g_over_4cos = mf.g1(distribution, wo, alpha) * g1_i * 0.25
+        i_dot_h = dr.fma(wi.x, h.x, dr.fma(wi.y, h.y, wi.z * h.z))
+        fresnel = mf.fresnel_schlick(f0, i_dot_h)
+        if smith:
+            f_g1_o = fresnel * mf.g1(distribution, wo, alpha)
+            f = d * f_g1_o * (g1_i * 0.25)
+            ratio = f_g1_o if visible else None
         else:
             cos_i = mi.Frame3f.cos_theta(wi)
             g = mf.g_cook_torrance(mi.Frame3f.cos_theta(h), cos_i,
-                                   mi.Frame3f.cos_theta(wo), dr.dot(wi, h))
-            g_over_4cos = g / (4.0 * dr.fmax(cos_i, mf.COS_FLOOR))
-        f = d * fresnel * g_over_4cos
+                                   mi.Frame3f.cos_theta(wo), i_dot_h)
+            f = d * fresnel * (g / (4.0 * dr.fmax(cos_i, mf.COS_FLOOR)))
     if pdf:
-        o_dot_h = dr.dot(wo, h)
-        pdf_m = d * (g1_i * dr.fmax(dr.dot(wi, h), 0.0) if visible else dr.fmax(h.z, 0.0))
-        jacobian = 1.0 / (4.0 * dr.select(o_dot_h > 0, o_dot_h, 1.0))      # dm/dwo
-        p = dr.select(o_dot_h > 0, pdf_m * jacobian, 0.0)
-    return f, p
+        # (D is 0 for the zero half vector of wo = -wi, where m·wo = 0)
+        if visible:
+            p = d * (g1_i * 0.25)
+        else:
+            o_dot_h = dr.fma(wo.x, h.x, dr.fma(wo.y, h.y, wo.z * h.z))
+            p = d * dr.fmax(h.z, 0.0) / (4.0 * dr.fmax(o_dot_h, mf.TINY))
+    return f, p, ratio
 
 
 def specular(wi, wo, alpha, f0, distribution: str, geometry: str):
@@ -232,14 +240,15 @@ class CookTorrance(BRDF):
         return inp
 
     def lobe_weights(self, inp):
-        return self.m_k, 1.0 - self.m_k
+        k = self.switch("k")
+        return k, 1.0 - k
 
     def f_diffuse(self, inp, si, wo):
         return lambert.f(inp.m_d, mi.Frame3f.cos_theta(wo), self.mode)
 
     def f_specular(self, inp, si, wo):
-        return inp.m_s * specular(si.wi, wo, inp.alpha, self.m_f0,
-                                  self.distribution, self.geometry)
+        return Scaled(inp.m_s, specular(si.wi, wo, inp.alpha, self.switch("f0"),
+                                        self.distribution, self.geometry))
 
     def selection_weights(self, inp, si):
         w_d = w_s = mi.Float(0.0)
@@ -258,9 +267,9 @@ class CookTorrance(BRDF):
         return pdf_lobe(si.wi, wo, inp.alpha, self.distribution, self.sample_visible)
 
     def f_pdf_specular(self, inp, si, wo):
-        f, p = lobe(si.wi, wo, inp.alpha, self.distribution, self.m_f0, self.geometry,
-                    self.sample_visible)
-        return inp.m_s * f, p
+        f, p, ratio = lobe(si.wi, wo, inp.alpha, self.distribution, self.switch("f0"),
+                           self.geometry, self.sample_visible)
+        return Scaled(inp.m_s, f, ratio), p
 
     # --- energy compensation ----------------------------------------------------
     def albedo_spec(self) -> energy.AlbedoSpec:

@@ -115,7 +115,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from .base import BRDF, Option, Param, Reader
+from .base import BRDF, Option, Param, Reader, Scaled
 from .grid import Axis, Grid
 
 METHODS = ("exact", "table")
@@ -154,10 +154,10 @@ def sin_alpha_tan_beta(cos_i, cos_o):
 
 def oren_nayar(m_d, sigma, g, sa_tb, cos_o, mode: str):
     """eval of both modes: m_D·clamp(d·n)·(A + B G sin α tan β), /π in hdr
-    (before the scanline clamp, which the base applies)."""
+    (before the scanline clamp, which the base applies), as m_D times its shape."""
     a, b = a_b(sigma)
     scale = 1.0 if mode == "scanline" else dr.inv_pi
-    return m_d * (scale * dr.fmax(cos_o, 0.0) * (a + b * g * sa_tb))
+    return Scaled(m_d, scale * dr.fmax(cos_o, 0.0) * (a + b * g * sa_tb))
 
 
 # ----------------------------------------------------------------------------
@@ -201,13 +201,14 @@ def eon_roughness(sigma):
 def fon(m_d, r, wi, wo):
     """Fujii's Oren-Nayar (FON) in eval convention: m_D/π A (1 + r s/t) cos θ_o,
     s = ω_i·ω_o - μ_i μ_o, t = max(μ_i, μ_o) where s > 0 (else 1), A = 1/(1 + C1 r).
-    Written as A (μ_o + r s μ_o/t) with μ_o/t <= 1: finite at grazing."""
+    Written as A (μ_o + r s μ_o/t) with μ_o/t <= 1: finite at grazing. As m_D
+    times its shape."""
     mu_i, mu_o = dr.fmax(wi.z, 0.0), dr.fmax(wo.z, 0.0)
     s = wi.x * wo.x + wi.y * wo.y                      # = ω_i·ω_o - μ_i μ_o, exactly
     t = dr.fmax(mu_i, mu_o)
     ratio = dr.select(s > 0, mu_o / dr.select(t > 0, t, 1.0), mu_o)    # μ_o / t
     a = 1.0 / (1.0 + FON_C1 * r)
-    return m_d * (dr.inv_pi * a * (mu_o + r * s * ratio))
+    return Scaled(m_d, dr.inv_pi * a * (mu_o + r * s * ratio))
 
 
 def fon_albedo(mu, r):

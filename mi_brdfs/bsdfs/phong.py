@@ -90,7 +90,7 @@ import drjit as dr
 import mitsuba as mi
 
 from . import energy, lambert, powercos
-from .base import BRDF, Param, mean
+from .base import BRDF, Param, Scaled, mean
 from .grid import Axis
 
 MAX_EXPONENT = 1e8     # lobe ~1e-4 rad wide, still 1000x the float32 direction spacing
@@ -190,7 +190,7 @@ class Phong(BRDF):
 
     def f_specular(self, inp, si, wo):
         spec = self.specular_scanline if self.mode == "scanline" else self.specular_hdr
-        return inp.m_s * spec(si.wi, wo, inp.gamma)
+        return Scaled(inp.m_s, spec(si.wi, wo, inp.gamma))
 
     def selection_weights(self, inp, si):
         w_d = mean(inp.m_d) if self.diffuse else mi.Float(0.0)

@@ -122,7 +122,7 @@ import drjit as dr
 import mitsuba as mi
 
 from . import energy, lambert, microfacet as mf
-from .base import BRDF, Option, Param, Reader, mean
+from .base import BRDF, Option, Param, Reader, Scaled, mean
 from .grid import Axis
 
 ALPHA_MIN = 1e-4      # smallest roughness used (0 is clamped here)
@@ -306,7 +306,7 @@ class Ward(BRDF):
         return lambert.f(inp.m_d, mi.Frame3f.cos_theta(wo), self.mode)
 
     def f_specular(self, inp, si, wo):
-        return inp.m_s * SPECULAR[self.formula](si.wi, wo, inp.alpha_t, inp.alpha_b)
+        return Scaled(inp.m_s, SPECULAR[self.formula](si.wi, wo, inp.alpha_t, inp.alpha_b))
 
     def selection_weights(self, inp, si):
         w_d = lambert.albedo(mean(inp.m_d), self.mode) if self.diffuse else mi.Float(0.0)

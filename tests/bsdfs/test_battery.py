@@ -562,6 +562,31 @@ def test_a_lobe_is_dropped_only_when_it_cannot_matter(name):
                 f"{where} as a texture: lobe dropped"
 
 
+@pytest.mark.parametrize("name", [n for n, c in PLUGINS.items()
+                                  if any(p.kind == "float" for p in c.PARAMS)])
+def test_a_number_folded_at_0_or_1_unfolds_when_it_changes(name, rng):
+    """A plain number at 0 or 1 (k = 0, f0 = 1, ...) is traced as that number
+    (BRDF.switch); changed through update(), the BSDF equals a fresh load with
+    the new value, and what its calls trace changes with it (trace_key: a
+    frozen render records again instead of replaying the folded number)."""
+    wi, wo = mirror_pairs(rng, 1024, ENTRIES[name].lobe_width, min_cos=0.05)
+    cases = [(p, v) for p in PLUGINS[name].PARAMS if p.kind == "float" for v in (0.0, 1.0)
+             if (p.lo is None or p.lo <= v) and (p.hi is None or v <= p.hi)]
+    assert cases
+    for p, value in cases:
+        bsdf = mi.load_dict({"type": name, p.name: value})
+        folded = bsdf.trace_key()
+        other = 0.37 if value == 0.0 else 0.63
+        params = mi.traverse(bsdf)
+        params[traverse_key(p)] = other
+        params.update()
+        assert bsdf.trace_key() != folded, f"{name}.{p.name} = {value}"
+        fresh = mi.load_dict({"type": name, p.name: other})
+        for a, b in zip(evaluate(bsdf, wi, wo), evaluate(fresh, wi, wo)):
+            np.testing.assert_allclose(a, b, rtol=1e-5, atol=1e-7,
+                                       err_msg=f"{name}.{p.name}: {value} -> {other}")
+
+
 # ----------------------------------------------------------------------------
 #  10. Every property form, every direct call
 # ----------------------------------------------------------------------------

@@ -673,7 +673,8 @@ BENCH_ENERGY: list[tuple[str, dict]] = [
 
 # Many spheres, each with its own material (materials, frozen): kind -> the
 # material of the sphere at place t in [0, 1] of the grid; and the pairs
-# (plugin, built-in) compared.
+# (plugin, built-in) compared, each with its floor: the same BSDF as a bare
+# Python mi.BSDF (tools/bench/floor.py).
 BENCH_MATERIALS: dict[str, Callable[[float], dict]] = {
     "cook_torrance": lambda t: {"type": "cook_torrance", "distribution": "ggx",
                                 "geometry": "smith", "f0": 1.0, "k": 0.0,
@@ -684,5 +685,14 @@ BENCH_MATERIALS: dict[str, Callable[[float], dict]] = {
                           "reflectance": {"type": "rgb", "value": [0.2 + 0.6 * t, 0.5, 0.8 - 0.6 * t]}},
     "diffuse": lambda t: {"type": "diffuse",
                           "reflectance": {"type": "rgb", "value": [0.2 + 0.6 * t, 0.5, 0.8 - 0.6 * t]}},
+    "floor_ggx": lambda t: {"type": "bench_floor_ggx", "alpha": 0.05 + 0.5 * t},
+    "floor_diffuse": lambda t: {"type": "bench_floor_diffuse",
+                                "reflectance": {"type": "rgb", "value": [0.2 + 0.6 * t, 0.5, 0.8 - 0.6 * t]}},
 }
 BENCH_MATERIAL_PAIRS = [("cook_torrance", "roughconductor"), ("lambert", "diffuse")]
+BENCH_FLOORS = {"cook_torrance": "floor_ggx", "lambert": "floor_diffuse"}    # plugin -> floor
+# The floor beside a BENCH_BUILTIN pair in the tracing group (the same BSDF).
+BENCH_TRACING_FLOORS: dict[str, dict] = {
+    BENCH_BUILTIN[0][0]: {"type": "bench_floor_ggx", "alpha": 0.3},
+    BENCH_BUILTIN[2][0]: {"type": "bench_floor_diffuse", "reflectance": 0.6},
+}

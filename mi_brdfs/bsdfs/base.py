@@ -45,6 +45,7 @@ A model subclasses :class:`BRDF` and supplies:
     estimates of each lobe's albedo (weights included), for lobe selection;
 ``sample_specular(inp, si, sample2)``, ``pdf_specular(inp, si, wo)``
     the glossy lobe's sampler and its density;
+
 and, if ``compensable``: ``ms_colour(inp)`` and either ``albedo_spec()`` and
 ``table_parameters(inp)`` (a tabulated albedo, :mod:`.energy`) or
 ``albedo(inp, v)`` and ``albedo_average(inp)`` (an analytic one).

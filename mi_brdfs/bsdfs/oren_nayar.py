@@ -78,7 +78,7 @@ small σ at grazing incidence the qualitative model slightly exceeds 1 (about
 ``method="table"``. As the lecture suggests, the σ-dependent factors stay
 analytic (A and B, so σ may be a texture and may change without rebuilding)
 and only the geometric factor T(p, q) = sin α tan β, a function of p = d·n and
-q = ω_r·n alone, is tabulated on a uniform ``table_resolution``² grid over
+q = ω_r·n alone, is tabulated on a uniform ``table_resolution`` × ``table_resolution`` grid over
 [0, 1]² and bilinearly interpolated::
 
     f_r = m_D/π · (A + B G T~(d·n, ω_r·n))          (hdr; scanline likewise)

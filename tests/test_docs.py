@@ -48,6 +48,19 @@ def test_plugin_page_names_every_parameter_and_option(site, cls):
     assert declared <= names, f"missing from the page's table: {sorted(declared - names)}"
 
 
+@pytest.mark.parametrize("cls", PLUGINS, ids=lambda c: c.name)
+def test_help_shows_the_generated_table(cls):
+    """help(mi_brdfs.Phong) shows the module's documentation with the table
+    made from the declarations; every parameter and option says what it is."""
+    from mi_brdfs.bsdfs.base import BASE_DOCS, PARAMETERS
+    doc = cls.__doc__
+    assert PARAMETERS not in doc and doc.lstrip().startswith(f"``{cls.name}``")
+    for p in cls.PARAMS:
+        assert f"   * - ``{p.name}``" in doc and len(p.doc) > 10, p.name
+    for o in cls.options():
+        assert f"   * - ``{o.name}``" in doc and len(o.doc or BASE_DOCS[o.name]) > 10, o.name
+
+
 def test_plugin_pages_show_renders_and_lobes(site):
     for cls in PLUGINS:
         page = open(os.path.join(site, f"_generated/plugins/{cls.name}.html"),
@@ -58,7 +71,7 @@ def test_plugin_pages_show_renders_and_lobes(site):
 
 
 def _options(parser: argparse.ArgumentParser) -> list[str]:
-    return [a.option_strings[-1] if a.option_strings else a.dest for a in parser._actions
+    return [a.option_strings[-1] if a.option_strings else (a.metavar or a.dest) for a in parser._actions
             if not isinstance(a, (argparse._HelpAction, argparse._SubParsersAction))]
 
 

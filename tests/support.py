@@ -127,6 +127,130 @@ def config_id(config: dict) -> str:
 
 
 # ----------------------------------------------------------------------------
+#  Property forms: every way a Mitsuba scene gives a parameter
+# ----------------------------------------------------------------------------
+
+PAIRS = "400:0.2, 550:0.6, 700:0.4"          # a <spectrum> of wavelength:value pairs
+BITMAP = [[[0.1, 0.5, 0.9], [0.3, 0.3, 0.3]], [[0.8, 0.2, 0.4], [0.6, 0.7, 0.1]]]
+UVS = [(0.5, 0.5), (0.1, 0.2), (0.9, 0.3), (0.3, 0.8)]      # where textures are compared
+
+
+def property_forms(folder) -> dict[str, str]:
+    """{form: an XML element of parameter NAME}, in every form Mitsuba's own
+    plugins accept for a colour or a scalar, with values in [0.1, 0.9] (within
+    every parameter's range). The spectrum file and the bitmap are written
+    into ``folder``; ``ref`` refers to the texture of :func:`load_form`."""
+    from pathlib import Path
+    folder = Path(folder)
+    spd, exr = folder / "forms.spd", folder / "forms.exr"
+    spd.write_text("".join(f"{w} {v}\n" for w, v in (p.split(":") for p in PAIRS.split(", "))))
+    mi.Bitmap(np.array(BITMAP, dtype=np.float32)).write(str(exr))
+    return {
+        "float": '<float name="NAME" value="0.3"/>',
+        "integer": '<integer name="NAME" value="1"/>',
+        "rgb": '<rgb name="NAME" value="0.2, 0.5, 0.8"/>',
+        "spectrum": '<spectrum name="NAME" value="0.4"/>',
+        "pairs": f'<spectrum name="NAME" value="{PAIRS}"/>',
+        "file": f'<spectrum name="NAME" filename="{spd}"/>',
+        "bitmap": f'<texture type="bitmap" name="NAME"><string name="filename" value="{exr}"/>'
+                  '</texture>',
+        "ref": '<ref name="NAME" id="shared"/>',
+    }
+
+
+def load_form(plugin: str, name: str, element: str):
+    """``plugin`` with its parameter ``name`` given as ``element`` (from
+    :func:`property_forms`), loaded from XML: a ``ref`` inside a scene that
+    declares the texture it refers to (a checkerboard) and a shape using it."""
+    element = element.replace("NAME", name)
+    bsdf = f'<bsdf type="{plugin}">{element}</bsdf>'
+    if "<ref" not in element:
+        return mi.load_string(bsdf.replace("<bsdf ", '<bsdf version="3.0.0" ', 1))
+    scene = mi.load_string(
+        '<scene version="3.0.0"><texture type="checkerboard" id="shared">'
+        '<float name="color0" value="0.2"/><float name="color1" value="0.7"/></texture>'
+        f'<shape type="rectangle">{bsdf}</shape></scene>')
+    return scene.shapes()[0].bsdf()
+
+
+def texture_values(bsdf, name: str, method: str) -> np.ndarray:
+    """``bsdf.<method>(name, si)`` (eval_attribute or eval_attribute_1) at
+    :data:`UVS`, as (len(UVS), channels) float64; fixed wavelengths in spectral
+    variants. Lane by lane in scalar variants."""
+    def si_at(uv):
+        si = dr.zeros(mi.SurfaceInteraction3f, len(uv[0])) if dr.is_jit_v(mi.Float) \
+            else dr.zeros(mi.SurfaceInteraction3f)
+        si.uv = mi.Point2f(*uv)
+        if mi.is_spectral:
+            si.wavelengths = mi.UnpolarizedSpectrum(*[mi.Float(w) for w in (450, 520, 610, 680)])
+        return si
+    if dr.is_jit_v(mi.Float):
+        u, v = (np.array(c, dtype=np.float64) for c in zip(*UVS))
+        value = getattr(bsdf, method)(name, si_at((u, v)))
+        out = np.array(value, dtype=np.float64).reshape(1 if method.endswith("_1") else len(value), -1)
+        return np.broadcast_to(out, (out.shape[0], len(UVS))).T    # (a constant has width 1)
+    return np.array([np.array(getattr(bsdf, method)(name, si_at(uv)), dtype=np.float64).ravel()
+                     for uv in UVS])
+
+
+def property_form_failures(plugin: str, folder) -> list[str]:
+    """Every parameter of ``plugin`` in every form of :func:`property_forms`:
+    a colour or scalar holds what Mitsuba's ``diffuse`` holds for the same
+    element (its texture compared at :data:`UVS`); a plain number takes
+    <float> and <integer>; whatever is refused (a texture or spectrum for a
+    plain number; in spectral variants a wavelength-dependent spectrum or a
+    3-channel bitmap for a scalar, which have no single value there) is
+    refused with the one-line error. Wrong types (<string>, <boolean>) and
+    out-of-range spectrum values are refused with one line. Returns the
+    failures, one line each (empty: all as expected)."""
+    from mi_brdfs.bsdfs import BY_NAME
+    forms, failures = property_forms(folder), []
+
+    def refused(p, element, shown: str | None = None) -> None:
+        try:
+            load_form(plugin, p.name, element)
+        except Exception as e:
+            last = error_line(e)
+            head = f"{plugin}: parameter '{p.name}' = " + (shown or "")
+            if head not in last or "is invalid; valid:" not in last:
+                failures.append(f"{p.name} {element}: not the one-line error: {last}")
+            return
+        failures.append(f"{p.name} {element}: accepted, should be refused")
+
+    for p in BY_NAME[plugin].PARAMS:
+        method = "eval_attribute_1" if p.kind == "scalar" else "eval_attribute"
+        for form, element in forms.items():
+            if p.kind == "float" and form not in ("float", "integer") or (
+                    mi.is_spectral and p.kind == "scalar" and form in ("pairs", "file", "bitmap")):
+                refused(p, element)
+                continue
+            try:
+                bsdf = load_form(plugin, p.name, element)
+            except Exception as e:
+                failures.append(f"{p.name} {form}: refused: {error_line(e)}")
+                continue
+            if p.kind == "float":
+                value = float(np.array(mi.traverse(bsdf)[p.name]).ravel()[0])
+                expected = 1.0 if form == "integer" else 0.3
+                if abs(value - expected) > 1e-7:
+                    failures.append(f"{p.name} {form}: holds {value}, not {expected}")
+                continue
+            ours = texture_values(bsdf, p.name, method)
+            theirs = texture_values(load_form("diffuse", "reflectance", element), "reflectance",
+                                    method)
+            if ours.shape != theirs.shape or not np.allclose(ours, theirs, rtol=1e-6, atol=0):
+                failures.append(f"{p.name} {form}: {np.round(ours[0], 5).tolist()} where "
+                                f"diffuse holds {np.round(theirs[0], 5).tolist()}")
+        # wrong types, and a spectrum holding a value out of range
+        refused(p, '<string name="NAME" value="abc"/>', "'abc'")
+        refused(p, '<boolean name="NAME" value="true"/>', "True")
+        if p.kind != "float":
+            bad = p.lo - 0.5 if p.lo is not None else p.hi + 0.5
+            refused(p, f'<spectrum name="NAME" value="400:0.5, 700:{bad:g}"/>', repr(bad))
+    return failures
+
+
+# ----------------------------------------------------------------------------
 #  Chi-square (Mitsuba's test, as its own BSDF tests use it)
 # ----------------------------------------------------------------------------
 

@@ -104,6 +104,12 @@ class Param:
     def valid(self) -> str:
         return f"[{_fmt(self.lo, '-inf')}, {_fmt(self.hi, 'inf')}]"
 
+    def forms(self) -> str:
+        """The property forms it accepts, with its range (for error messages)."""
+        if self.kind == "float":
+            return f"a number (<float> or <integer>) in {self.valid()}"
+        return f"<float>, <rgb>, <spectrum> or a texture, with values in {self.valid()}"
+
     def probe_hi(self) -> float:
         """The largest value the tests try (hi, or ``upper``, or 1)."""
         return self.hi if self.hi is not None else (self.upper if self.upper is not None else 1.0)
@@ -119,17 +125,48 @@ class Option:
 
     def valid(self) -> str:
         if isinstance(self.default, bool):
-            return "true or false"
-        return "one of " + ", ".join(f'"{c}"' for c in self.choices)
+            return "true or false (a <boolean>)"
+        return "one of " + ", ".join(f'"{c}"' for c in self.choices) + " (a <string>)"
 
 
 def _fmt(x: float | None, none: str) -> str:
     return none if x is None else f"{x:g}"
 
 
+class Shown:
+    """A value as an error message shows it: its text, unquoted."""
+
+    def __init__(self, text: str):
+        self.text = text
+
+    def __repr__(self) -> str:
+        return self.text
+
+
+def shown(value):
+    """``value`` for a one-line error message: numbers and strings as they are,
+    a spectrum by its samples, an object by its class (never a multi-line
+    description)."""
+    if isinstance(value, (bool, int, float, str, Shown)):
+        return value
+    if isinstance(value, mi.Object):
+        kind = "a texture" if isinstance(value, mi.Texture) else "an object"
+        return Shown(f"{kind} ({value.class_name()})")
+    if hasattr(value, "wavelengths") and hasattr(value, "is_uniform"):   # a <spectrum>
+        if value.is_uniform():
+            return Shown(f"a spectrum ({value.values[0]:g})")
+        pairs = [f"{w:g}:{v:g}" for w, v in zip(value.wavelengths, value.values)]
+        if len(pairs) > 4:
+            pairs = pairs[:2] + ["...", pairs[-1]]
+        return Shown(f"a spectrum ({', '.join(pairs)})")
+    text = " ".join(repr(value).split())
+    return Shown(text if len(text) <= 60 else text[:57] + "...")
+
+
 def parameter_error(plugin: str, name: str, value, valid: str) -> ParameterError:
     """The one-line message of every bad parameter value."""
-    return ParameterError(f"{plugin}: parameter '{name}' = {value!r} is invalid; valid: {valid}")
+    return ParameterError(f"{plugin}: parameter '{name}' = {shown(value)!r} is invalid; "
+                          f"valid: {valid}")
 
 
 def check_value(plugin: str, name: str, value: float, lo: float | None, hi: float | None,
@@ -142,25 +179,48 @@ def check_value(plugin: str, name: str, value: float, lo: float | None, hi: floa
                               valid or f"[{_fmt(lo, '-inf')}, {_fmt(hi, 'inf')}]")
 
 
+def _coefficients(value) -> bool:
+    """True for an array of spectral-upsampling coefficients: in spectral
+    variants, what ``srgb`` and 3-channel bitmaps store (3 per colour)."""
+    if not mi.is_spectral:
+        return False
+    if dr.is_tensor_v(value):
+        return value.ndim == 3 and value.shape[-1] == 3
+    return dr.size_v(value) == 3
+
+
 def _arrays(obj) -> list:
-    """The numeric arrays of a texture's parameters (or of a plain Float)."""
+    """The numbers a texture holds, its differentiable parameters (not its
+    wavelengths or transforms), or a plain Float itself."""
     if isinstance(obj, mi.Object):
+        params = mi.traverse(obj)
         out = []
-        for _, value in mi.traverse(obj).items():
-            if isinstance(value, (float, int)) or (dr.is_array_v(value) and not dr.is_integral_v(value)
-                                                   and not dr.is_mask_v(value)):
+        for key in params.keys():
+            if params.flags(key) & mi.ParamFlags.NonDifferentiable:
+                continue
+            value = params[key]
+            if isinstance(value, (float, int)) or (dr.is_array_v(value) and dr.is_float_v(value)):
                 out.append(value)
         return out
     return [obj]
 
 
+# Spectral upsampling (Jakob & Hanika 2019) gives a sigmoid of a polynomial in
+# the wavelength: every spectrum stored as coefficients lies in [0, 1].
+UPSAMPLED_RANGE = (0.0, 1.0)
+
+
 def value_range(obj) -> tuple[float, float] | None:
-    """(min, max) over every numeric parameter of a texture (or a Float); NaN if
-    any value is NaN; None if it has none. Reduced in Dr.Jit, without copies."""
+    """(min, max) of the values a texture (or a Float) holds; NaN if any is NaN;
+    None if it holds none. Spectral-upsampling coefficients count as the range
+    of the spectra they encode, [0, 1]."""
     lo, hi = math.inf, -math.inf
     found = False
     for a in _arrays(obj):
-        x = np.asarray(dr.detach(a) if dr.is_array_v(a) else a, dtype=np.float64).ravel()
+        if _coefficients(a):
+            x = np.array(UPSAMPLED_RANGE)
+        else:
+            x = np.asarray(dr.detach(a) if dr.is_array_v(a) else a, dtype=np.float64).ravel()
         if x.size == 0:
             continue
         found = True
@@ -175,13 +235,25 @@ def grad_enabled(obj) -> bool:
     return any(dr.grad_enabled(a) for a in _arrays(obj) if dr.is_array_v(a))
 
 
-def to_float(x) -> float:
-    """A Python float from an opaque Float (JIT variants) or a float (scalar ones)."""
-    return float(x[0]) if dr.is_array_v(x) else float(x)
+def number(x: float):
+    """A plain number parameter as the formulas use it: an opaque Float in JIT
+    variants (one kernel for every value), a float in scalar ones."""
+    return dr.opaque(mi.Float, x)
+
+
+T = mi.Properties.Type
+NUMBERS = (T.Float, T.Integer)
 
 
 class Reader:
-    """Reads one plugin's properties and raises ParameterError on bad values."""
+    """Reads one plugin's properties and raises ParameterError on bad values.
+
+    A colour or scalar parameter takes every form Mitsuba's own plugins take
+    (``props.get_texture``: a float, an rgb, a spectrum, a texture, a
+    reference), and means what it means to them; a Python list of three
+    numbers (``mi.load_dict``) reads as an rgb. A plain number takes a float or
+    an integer. Range checks apply to the values the element holds.
+    """
 
     def __init__(self, plugin: str, props: mi.Properties):
         self.plugin, self.props = plugin, props
@@ -193,46 +265,87 @@ class Reader:
         check_value(self.plugin, name, value, lo, hi)
 
     def read(self, p: Param):
-        """The value of parameter ``p``: a texture, or an opaque Float for kind "float"."""
-        props = self.props
-        if p.kind == "float":
-            value = float(props.get(p.name, p.default))
-            self.check(p.name, value, p.lo, p.hi)
-            return dr.opaque(mi.Float, value)
-        if p.name not in props:
-            self.check(p.name, p.default, p.lo, p.hi)
+        """The value of parameter ``p``: a texture, or a number for kind "float"."""
+        props, name = self.props, p.name
+        if name not in props:
+            self.check(name, p.default, p.lo, p.hi)
+            if p.kind == "float":
+                return number(p.default)
             return mi.load_dict({"type": "uniform", "value": p.default})
-        value = props[p.name]
-        if isinstance(value, (int, float)):
-            self.check(p.name, float(value), p.lo, p.hi)
-            return mi.load_dict({"type": "uniform", "value": float(value)})
-        if not isinstance(value, mi.Object):      # an rgb colour
-            rgb = [float(c) for c in value]
-            for c in rgb:
-                self.check(p.name, c, p.lo, p.hi)
-            # Colours above 1 are accepted (``unbounded``): the scanline clamp limits them.
-            return mi.load_dict({"type": "srgb", "color": rgb, "unbounded": True})
-        tex = props.get_texture(p.name)            # a nested texture
-        self.check_texture(p, tex)
+        kind, value = props.type(name), props[name]
+        if p.kind == "float":
+            if kind not in NUMBERS:
+                raise self.error(name, value, p.forms())
+            self.check(name, float(value), p.lo, p.hi)
+            return number(float(value))
+        if kind == T.Vector:                       # [r, g, b] from a Python dictionary
+            props[name] = mi.ScalarColor3d(value)
+            kind = T.Color
+        if kind in NUMBERS:
+            values = [float(value)]
+        elif kind == T.Color:
+            values = [float(c) for c in value]
+        elif kind == T.Spectrum:
+            values = [float(v) for v in value.values]
+        elif kind == T.Object and isinstance(value, mi.Texture):
+            self.check_texture(p, value)
+            self.check_evaluates(p, value)
+            return value
+        else:
+            raise self.error(name, value if kind in (T.String, T.Bool, T.Object)
+                             else Shown(f"a <{kind.name.lower()}>"), p.forms())
+        for v in values:
+            self.check(name, v, p.lo, p.hi)
+        pairs = kind == T.Spectrum and not value.is_uniform()
+        if pairs and min(values) < 0.0:
+            # a distribution in spectral variants; clipped to 0 in sRGB in RGB variants
+            raise self.error(name, min(values), "a <spectrum> of values >= 0 (a <float> "
+                             "for a negative constant)")
+        if kind == T.Color and mi.is_spectral and max(values) > 1.0:
+            # rgb2spec clamps to [0, 1]: (2, 2, 2) would be 1, (3, 0.5, 0.1) another hue
+            raise self.error(name, max(values), "rgb components <= 1 in spectral variants "
+                             "(spectral upsampling holds [0, 1]); a <float> or a <spectrum> "
+                             "for values above 1")
+        # Colours above 1 are accepted (the scanline clamp limits them): unbounded
+        # then, so that a spectrum's sRGB colour is not clipped to 1 in RGB variants.
+        try:
+            tex = (props.get_unbounded_texture if max(values) > 1.0 else props.get_texture)(name)
+        except Exception as e:                    # e.g. a spectrum file Mitsuba cannot read
+            reason = str(e).strip().splitlines()[-1].split("] ")[-1]
+            raise self.error(name, value, f"{p.forms()} (Mitsuba: {reason})") from None
+        if pairs:
+            self.check_evaluates(p, tex)
         return tex
 
     def check_texture(self, p: Param, tex) -> None:
-        # Its parameters are its values in RGB and mono variants; spectral
-        # variants store spectral-upsampling coefficients instead (unchecked).
-        rng = None if mi.is_spectral else value_range(tex)
+        rng = value_range(tex)
         if rng is not None:
             self.check(p.name, rng[0], p.lo, p.hi)
             self.check(p.name, rng[1], p.lo, p.hi)
 
+    def check_evaluates(self, p: Param, tex) -> None:
+        """A texture must answer the plugin's lookups (per channel, or one value
+        for kind "scalar"), or Mitsuba raises at the first render: e.g. in
+        spectral variants a wavelength-dependent spectrum or a 3-channel
+        bitmap has no single value."""
+        si = dr.zeros(mi.SurfaceInteraction3f)
+        try:
+            tex.eval_1(si) if p.kind == "scalar" else tex.eval(si)
+        except Exception:
+            raise self.error(p.name, tex, p.forms() + (
+                "; one value per point in spectral variants (a <float>, a constant "
+                "<spectrum>, a one-channel texture)" if p.kind == "scalar" else "")) from None
+
     def option(self, o: Option):
         """The value of option ``o`` (a string among its choices, or a bool)."""
-        value = self.props.get(o.name, o.default)
+        if o.name not in self.props:
+            return o.default
+        kind, value = self.props.type(o.name), self.props[o.name]
         if isinstance(o.default, bool):
-            if not isinstance(value, bool):
+            if kind != T.Bool:
                 raise self.error(o.name, value, o.valid())
             return value
-        value = str(value)
-        if value not in o.choices:
+        if kind != T.String or value not in o.choices:
             raise self.error(o.name, value, o.valid())
         return value
 
@@ -362,8 +475,7 @@ class BRDF:
                 continue
             if name in names:
                 self.live.add(name)
-            rng = None if (mi.is_spectral and p.kind != "float") else value_range(
-                getattr(self, "m_" + name))
+            rng = value_range(getattr(self, "m_" + name))
             if rng is not None:        # stored in float32: compare with float32 bounds
                 lo, hi = (None if b is None else float(np.float32(b)) for b in (p.lo, p.hi))
                 check_value(self.name, name, rng[0], lo, hi, p.valid())

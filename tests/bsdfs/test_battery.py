@@ -15,7 +15,9 @@ parameter declarations (``PARAMS``, ``OPTIONS``):
    and weights also at their bounds (one-sided);
 8. bad values refused with one line (plugin, parameter, value, valid range) at
    load time and at ``params.update()``; bad options too;
-9. traverse and update; a lobe is dropped only when it cannot matter.
+9. traverse and update; a lobe is dropped only when it cannot matter;
+10. every property form a Mitsuba scene gives a parameter, read as Mitsuba's
+    own plugins read it.
 
 A model's own module keeps only its independent transcription of the lecture
 and what is particular to it.
@@ -35,7 +37,7 @@ from mi_brdfs.bsdfs.base import ParameterError
 from mi_brdfs.tools.catalog import ENTRIES
 from support import (CHI2_ALPHA, albedo, assert_refused, chi2_test, chi2_test_count, config_id, evaluate,
                      error_line, finite, finite_difference, floats, points,
-                     f32, mirror_pairs, random_hemisphere, surface, vec)
+                     f32, mirror_pairs, property_form_failures, random_hemisphere, surface, vec)
 
 PLUGINS = BY_NAME
 MODES = ("hdr", "scanline")
@@ -548,3 +550,19 @@ def test_switches_exist():
     """The lobe-switch test above has cases for every model with two lobes."""
     names = {c.values[0] for c in switch_cases()}
     assert {"lambert", "phong", "blinn", "ward", "cook_torrance", "toon", "oren_nayar"} <= names
+
+
+# ----------------------------------------------------------------------------
+#  10. Every property form
+# ----------------------------------------------------------------------------
+
+@pytest.mark.parametrize("name", PLUGINS)
+def test_every_property_form(name, tmp_path):
+    """Each parameter as <float>, <integer>, <rgb>, <spectrum> (a constant,
+    wavelength:value pairs, a file), a bitmap and a reference by id: a colour
+    or scalar holds what Mitsuba's diffuse holds for the same element; a
+    plain number takes numbers only; wrong types and spectrum values out of
+    range are refused with one line (support.property_form_failures)."""
+    failures = property_form_failures(name, tmp_path)
+    assert not failures, "\n".join(failures)
+

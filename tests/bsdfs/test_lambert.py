@@ -5,25 +5,35 @@ import pytest
 
 import mitsuba as mi
 
-from support import albedo, evaluate, random_hemisphere, rgb
+from support import (albedo, evaluate, floats, load_form, points, property_forms,
+                     random_hemisphere, rgb, surface)
 
-COLOUR = [0.8, 0.4, 0.1]
 
-
-@pytest.mark.parametrize("reflectance", [0.5, COLOUR])
-def test_hdr_equals_mitsuba_diffuse(rng, reflectance):
+@pytest.mark.parametrize("form", ["float", "rgb", "spectrum", "pairs", "file"])
+def test_hdr_equals_mitsuba_diffuse(rng, tmp_path, form):
+    """The same reflectance element (<float>, <rgb>, a <spectrum> constant, of
+    wavelength:value pairs, from a file) in lambert and in diffuse: the same
+    eval, pdf and samples (a spectrum becomes sRGB here as in diffuse; the
+    spectral variants: tests/test_variants.py)."""
     n = 4096
     wi, wo = random_hemisphere(rng, n), random_hemisphere(rng, n)
     wo[: n // 4, 2] *= -1          # lights below the surface too
     wi[n // 4: n // 2, 2] *= -1    # and viewers below it
-    value = {"type": "rgb", "value": reflectance} if isinstance(reflectance, list) else reflectance
-    ours = mi.load_dict({"type": "lambert", "reflectance": value})
-    ref = mi.load_dict({"type": "diffuse", "reflectance": value})
+    element = property_forms(tmp_path)[form]
+    ours, ref = (load_form(plugin, "reflectance", element) for plugin in ("lambert", "diffuse"))
     v, p = evaluate(ours, wi, wo)
     v_ref, p_ref = evaluate(ref, wi, wo)
     np.testing.assert_allclose(v, v_ref, rtol=1e-5, atol=1e-7)
     np.testing.assert_allclose(p, p_ref, rtol=1e-5, atol=1e-7)
     assert np.count_nonzero(v[:, 0]) > n // 3     # not a trivial all-zero agreement
+    assert form in ("float", "spectrum") or np.ptp(v_ref[v_ref[:, 0] > 0][0]) > 0   # coloured
+    u = (floats(rng.random(n)), points(rng.random(n), rng.random(n)))
+    (bs, weight), (bs_ref, weight_ref) = (b.sample(mi.BSDFContext(), surface(wi), *u)
+                                          for b in (ours, ref))
+    up = wi[:, 2] > 0                # (below, diffuse reports a pdf with its weight 0; we pdf 0)
+    for a, b in ((bs.wo, bs_ref.wo), (bs.pdf, bs_ref.pdf)):
+        np.testing.assert_allclose(np.array(a)[..., up], np.array(b)[..., up], rtol=1e-5, atol=1e-6)
+    np.testing.assert_allclose(np.array(weight), np.array(weight_ref), rtol=1e-5, atol=1e-7)
 
 
 def test_scanline_is_lecture_formula(rng):

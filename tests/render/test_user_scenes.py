@@ -14,7 +14,7 @@ roughness). In llvm_ad_rgb and llvm_ad_spectral:
   (:func:`mi_brdfs.tools.validate.welch_test`, the validation report's
   test), Bonferroni-corrected over the pixels and Šidák over the
   comparisons of this module; a negative control shows the test finds a
-  3 % change of one material's reflectance in the same scene;
+  5 % change of one material's reflectance in the same scene;
 - in scanline mode (the scan-line integrator) every scene renders finite,
   non-negative and lit, in rgb within the integrator's [0, 1] clamp (in
   spectral variants the clamp applies per wavelength, and the sRGB values
@@ -89,10 +89,10 @@ def test_hdr_equals_mitsuba_builtins_to_noise(variant, name):
 
 def test_the_comparison_finds_a_small_difference():
     """Negative control: the same comparison tells ours from the built-ins
-    when one material (the grey ground of the colours scene) is 3 % darker."""
+    when one material (the grey ground of the colours scene) is 5 % darker."""
     scene = load("colours", materials="ours")
     params = mi.traverse(scene)
-    params["grey.reflectance.value"] = params["grey.reflectance.value"] * 0.97
+    params["grey.reflectance.value"] = params["grey.reflectance.value"] * 0.95
     params.update()
     same, test = equal_to_noise(render_passes(scene, seed0=0),
                                 render_passes(load("colours", materials="builtin"), seed0=1000))

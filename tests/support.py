@@ -201,7 +201,7 @@ def property_form_failures(plugin: str, folder) -> list[str]:
     plain number; in spectral variants a wavelength-dependent spectrum or a
     3-channel bitmap for a scalar, which have no single value there) is
     refused with the one-line error. Wrong types (<string>, <boolean>) and
-    out-of-range spectrum values are refused with one line. Returns the
+    values out of range in a spectrum or a texture are refused with one line. Returns the
     failures, one line each (empty: all as expected)."""
     from mi_brdfs.bsdfs import BY_NAME
     forms, failures = property_forms(folder), []
@@ -247,7 +247,203 @@ def property_form_failures(plugin: str, folder) -> list[str]:
         if p.kind != "float":
             bad = p.lo - 0.5 if p.lo is not None else p.hi + 0.5
             refused(p, f'<spectrum name="NAME" value="400:0.5, 700:{bad:g}"/>', repr(bad))
+            refused(p, '<texture type="checkerboard" name="NAME"><float name="color0" '
+                    f'value="0.5"/><float name="color1" value="{bad:g}"/></texture>', repr(bad))
     return failures
+
+
+# ----------------------------------------------------------------------------
+#  Direct calls, updates, degenerate inputs (every variant, one lane at a time)
+# ----------------------------------------------------------------------------
+
+def interaction(wi) -> mi.SurfaceInteraction3f:
+    """A surface interaction for viewer ``wi`` (one 3-vector, or an (n, 3)
+    array in JIT variants), at uv (0.5, 0.5); fixed wavelengths in spectral
+    variants."""
+    wi = np.asarray(wi, dtype=np.float64)
+    if wi.ndim == 2:
+        si = dr.zeros(mi.SurfaceInteraction3f, len(wi))
+        si.wi = vec(wi)
+    else:
+        si = dr.zeros(mi.SurfaceInteraction3f)
+        si.wi = mi.Vector3f(*map(float, wi))
+    si.uv = mi.Point2f(0.5, 0.5)
+    if mi.is_spectral:
+        si.wavelengths = mi.UnpolarizedSpectrum(*[mi.Float(w) for w in (450, 520, 610, 680)])
+    return si
+
+
+def outputs(bsdf, si, wo, sample1, sample2) -> dict[str, np.ndarray]:
+    """eval, pdf, eval_pdf and sample (direction, pdf, weight), as float64
+    NumPy arrays of shape (values per lane, lanes)."""
+    ctx = mi.BSDFContext()
+    value, pdf = bsdf.eval_pdf(ctx, si, wo)
+    bs, weight = bsdf.sample(ctx, si, sample1, sample2)
+    out = {"eval": bsdf.eval(ctx, si, wo), "pdf": bsdf.pdf(ctx, si, wo), "eval_pdf value": value,
+           "eval_pdf pdf": pdf, "sample wo": bs.wo, "sample pdf": bs.pdf, "sample weight": weight}
+    dr.eval(*out.values())                # one kernel in JIT variants
+    lanes = dr.width(si.wi.x)             # (1 in scalar variants)
+    return {k: np.array(v, dtype=np.float64).reshape(-1, lanes) for k, v in out.items()}
+
+
+def lambert_diffuse_difference(folder) -> float:
+    """The largest relative difference between ``lambert`` and Mitsuba's
+    ``diffuse`` given the same <spectrum> (constant, wavelength:value pairs, a
+    file) and the same <rgb>, over eval, pdf and sample at a few inputs."""
+    forms = property_forms(folder)
+    rng = np.random.default_rng(5)
+    worst = 0.0
+    for form in ("spectrum", "pairs", "file", "rgb"):
+        ours, theirs = (load_form(t, "reflectance", forms[form]) for t in ("lambert", "diffuse"))
+        for _ in range(4):
+            wi, wo = (unit(np.abs(rng.normal(size=3))) for _ in range(2))
+            u = rng.random(3)
+            args = (interaction(wi), mi.Vector3f(*map(float, wo)), float(u[0]),
+                    mi.Point2f(float(u[1]), float(u[2])))
+            a, b = outputs(ours, *args), outputs(theirs, *args)          # (one lane)
+            for key in a:
+                scale = max(np.abs(b[key]).max(), 1e-30)
+                worst = max(worst, float(np.abs(a[key] - b[key]).max() / scale))
+    return worst
+
+
+def direct_call_failures(config: dict) -> list[str]:
+    """Direct calls as Mitsuba's bindings take them for its own plugins:
+    Python lists and tuples for ``sample2`` and ``wo`` give what the Dr.Jit
+    types give; ``has_attribute``/``eval_attribute*`` answer as ``diffuse``
+    does: each parameter is an attribute (a texture's value; a plain
+    number's through eval_attribute_1), an unknown name is none (0 in JIT
+    variants, an exception in scalar ones). Returns the failures."""
+    bsdf, diffuse = mi.load_dict(config), mi.load_dict({"type": "diffuse"})
+    si = interaction(unit(np.array([0.5, 0.1, 0.7])))
+    wo = unit(np.array([-0.3, 0.2, 0.9])).tolist()
+    failures = []
+    typed = outputs(bsdf, si, mi.Vector3f(*wo), mi.Float(0.5), mi.Point2f(0.3, 0.4))
+    for kind in (list, tuple):
+        try:
+            given = outputs(bsdf, si, kind(wo), 0.5, kind([0.3, 0.4]))
+        except Exception as e:
+            failures.append(f"{kind.__name__} arguments: {type(e).__name__}: {e}")
+            continue
+        for key, value in typed.items():
+            if not np.array_equal(given[key], value):            # (one lane each)
+                failures.append(f"{key} with {kind.__name__} arguments: {given[key]} != {value}")
+
+    def answer(b, method: str, name: str):
+        try:
+            return np.array(getattr(b, method)(name, si), dtype=np.float64).ravel()
+        except RuntimeError:
+            return "raises"
+    for name, p in bsdf.params.items():
+        if not bool(np.array(bsdf.has_attribute(name)).ravel()[0]):
+            failures.append(f"has_attribute({name!r}) is false")
+        one = answer(bsdf, "eval_attribute_1", name)
+        if p.kind == "float" and not (isinstance(one, np.ndarray) and np.allclose(
+                one, np.array(mi.traverse(bsdf)[name], dtype=np.float64).ravel())):
+            failures.append(f"eval_attribute_1({name!r}) = {one}, not its value")
+    for method in ("eval_attribute", "eval_attribute_1", "eval_attribute_3"):
+        ours, theirs = answer(bsdf, method, "nonsense"), answer(diffuse, method, "nonsense")
+        if type(ours) is not type(theirs) or (isinstance(ours, np.ndarray)
+                                              and not np.array_equal(ours, theirs)):
+            failures.append(f"{method}('nonsense') = {ours}; diffuse: {theirs}")
+    if bool(np.array(bsdf.has_attribute("nonsense")).ravel()[0]):
+        failures.append("has_attribute('nonsense') is true")
+    return failures
+
+
+def update_failures(config: dict) -> list[str]:
+    """Every parameter ``config`` gives as a number, written through
+    mi.traverse (plain numbers and uniform textures alike, in every variant)
+    to another valid value: after update() the BSDF gives what a fresh load
+    with those values gives, at a few inputs. Returns the failures."""
+    bsdf = mi.load_dict(config)
+    params, changed, failures = mi.traverse(bsdf), {}, []
+    for p in bsdf.params.values():
+        if isinstance(config.get(p.name), float):
+            lo = p.lo if p.lo is not None else -1.0
+            changed[p.name] = lo + 0.37 * (p.probe_hi() - lo)
+            try:
+                params[p.name if p.kind == "float" else p.name + ".value"] = changed[p.name]
+            except Exception as e:
+                failures.append(f"{p.name}: not writable: {type(e).__name__}: {e}")
+    params.update()
+    fresh = mi.load_dict({**config, **changed})
+    rng = np.random.default_rng(3)
+    for _ in range(4):
+        wi = unit(np.abs(rng.normal(size=3)))
+        wo = wi * [-1, -1, 1] + 0.2 * rng.normal(size=3)          # near the highlight
+        wo[2] = abs(wo[2])
+        args = (interaction(wi), mi.Vector3f(*map(float, unit(wo))), float(rng.random()),
+                mi.Point2f(*map(float, rng.random(2))))
+        a, b = outputs(bsdf, *args), outputs(fresh, *args)
+        for key in a:
+            if not np.allclose(a[key], b[key], rtol=1e-5, atol=1e-7):
+                failures.append(f"{key} after update: {a[key].ravel()} != {b[key].ravel()}")
+    return failures
+
+
+# Degenerate inputs: viewers at the normal, oblique, on the horizon (along s
+# and t), 1e-30 above it, below, and the zero vector; lights opposite the
+# viewer (the half vector 0), the zero vector, on the horizon and mirrored;
+# samples at the corners and edges of the unit square.
+DEGENERATE_VIEWERS = [(0, 0, 1), (0.6, 0, 0.8), (1, 0, 0), (0, 1, 0), (1, 0, 1e-30),
+                      (0, 0, -1), (0, 0, 0)]
+DEGENERATE_SAMPLES = [(s1, s2) for s1 in (0.0, 1.0)
+                      for s2 in ((0, 0), (0, 1), (1, 0), (1, 1), (0.5, 1), (1, 0.5), (0.5, 0))]
+
+
+def degenerate_inputs() -> list[tuple]:
+    """(wi, wo, sample1, sample2): each viewer against each light (-wi, 0, the
+    horizon along s and t, the mirror direction), and the first three viewers
+    against -wi with every sample of :data:`DEGENERATE_SAMPLES`."""
+    inputs = []
+    for i, wi in enumerate(DEGENERATE_VIEWERS):
+        x, y, z = wi
+        lights = [(-x, -y, -z), (0, 0, 0), (1, 0, 0), (0, -1, 0), (-x, -y, z)]
+        inputs += [(wi, wo) + DEGENERATE_SAMPLES[(5 * i + k) % len(DEGENERATE_SAMPLES)]
+                   for k, wo in enumerate(lights)]
+        if i < 3:
+            inputs += [(wi, lights[0], s1, s2) for s1, s2 in DEGENERATE_SAMPLES]
+    return inputs
+
+
+def degenerate_configs() -> list[dict]:
+    """Every plugin in both modes, every microfacet distribution and geometry,
+    both microfacet samplers, energy compensation, and the models' options."""
+    from mi_brdfs.bsdfs import BY_NAME
+    from mi_brdfs.bsdfs.microfacet import DISTRIBUTIONS, GEOMETRIES
+    ct = {"type": "cook_torrance", "k": 0.2}
+    return ([{"type": name, "mode": mode} for name in BY_NAME for mode in ("hdr", "scanline")]
+            + [{**ct, "distribution": d, "geometry": g, "sample_visible": v}
+               for d in DISTRIBUTIONS for g in GEOMETRIES for v in (True, False)
+               if v or (d != "blinn" and g == "smith")]
+            + [{"type": name, "energy_compensation": True}
+               for name, cls in BY_NAME.items() if cls.compensable]
+            + [{"type": "ward", "alpha_u": 0.05, "alpha_v": 0.3, "formula": "angles"},
+               {"type": "toon", "specular_model": "blinn", "smoothness": 0.2},
+               {"type": "oren_nayar", "method": "table"}])
+
+
+def degenerate_lanes(bsdf) -> dict[str, list]:
+    """:func:`outputs` at every :func:`degenerate_inputs`, lane by lane (one
+    call each in scalar variants, one vectorised call in JIT ones): {output:
+    [values of each lane]}, and "errors": the exceptions raised, as text."""
+    inputs = degenerate_inputs()
+    wi, wo, s1, s2 = (np.array([i[k] for i in inputs], dtype=np.float64) for k in range(4))
+    if dr.is_jit_v(mi.Float):
+        values = outputs(bsdf, interaction(wi), vec(wo), floats(s1), points(s2[:, 0], s2[:, 1]))
+        return {"errors": [], **{k: v.T.tolist() for k, v in values.items()}}
+    out: dict[str, list] = {"errors": []}
+    for k in range(len(inputs)):
+        try:
+            values = outputs(bsdf, interaction(wi[k]), mi.Vector3f(*map(float, wo[k])),
+                             float(s1[k]), mi.Point2f(*map(float, s2[k])))
+        except Exception as e:
+            out["errors"].append(f"{inputs[k]}: {type(e).__name__}: {e}")
+            continue
+        for key, value in values.items():
+            out.setdefault(key, []).append(value[:, 0].tolist())
+    return out
 
 
 # ----------------------------------------------------------------------------

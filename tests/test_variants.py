@@ -2,7 +2,12 @@
 GPU exists): every plugin loads, evaluates and samples finite, non-negative
 values and passes one χ² test of its sampler; scalar_rgb gives llvm_ad_rgb's
 values; polarized variants get depolarizers; ``mi-brdfs render -m scalar_rgb``
-works. One subprocess per variant: a variant switch is global to a process.
+works. In every variant, every parameter takes every property form Mitsuba's
+own plugins take, as they read it (``lambert`` with a <spectrum> is ``diffuse``
+with it), and direct calls take what Mitsuba's bindings take (lists, tuples;
+attributes). In scalar_rgb no degenerate input raises, and every value
+llvm_ad_rgb gives 0 for is 0 (a plane lit from straight below renders black).
+One subprocess per variant: a variant switch is global to a process.
 
 Scalar variants have no vectorised χ² in Mitsuba (mi.chi2 needs JIT arrays), so
 there a small χ² of the same kind runs sample() and pdf() lane by lane: the
@@ -13,12 +18,13 @@ Its significance is part of the suite-wide Šidák correction (support).
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from support import (CHI2_ALPHA, CPU_VARIANTS, GPU_VARIANTS, chi2_test_count,
-                     variant_chi2_cases)
+                     degenerate_configs, degenerate_inputs, variant_chi2_cases)
 
 POLARIZED = ["scalar_spectral_polarized", "llvm_ad_mono_polarized", "llvm_ad_spectral_polarized"]
 
@@ -29,7 +35,11 @@ import mi_brdfs, mitsuba as mi, drjit as dr
 from scipy import stats
 
 variant, alpha, test_count = sys.argv[1], float(sys.argv[2]), int(sys.argv[3])
-cases = json.loads(sys.argv[4])
+cases, folder = json.loads(sys.argv[4]), sys.argv[6]
+sys.path.insert(0, sys.argv[5])                 # the tests' support module
+from support import (degenerate_configs, degenerate_lanes, direct_call_failures,
+                     lambert_diffuse_difference, property_form_failures, update_failures)
+from mi_brdfs.tools.catalog import ENTRIES
 rng = np.random.default_rng(7)
 N = 64
 v = rng.normal(size=(N, 3)); v /= np.linalg.norm(v, axis=1, keepdims=True); v[:, 2] = np.abs(v[:, 2])
@@ -110,9 +120,8 @@ def jit_chi2(config, theta):
 
 
 results = {}
-if variant != "scalar_rgb":
-    mi.set_variant(variant)
-    mi_brdfs.register()
+mi.set_variant(variant)
+mi_brdfs.register()
 for config, theta in cases:
     bsdf = mi.load_dict(config)
     r = {"lanes": lanes(bsdf)}
@@ -123,24 +132,78 @@ for config, theta in cases:
             p = scalar_chi2(bsdf, theta)
             r["chi2"] = p > 1 - (1 - alpha) ** (1 / test_count)     # Šidák, as Mitsuba's
             r["p"] = p
+    if variant != "llvm_ad_rgb":       # (the battery's variant runs them itself)
+        r["forms"] = property_form_failures(config["type"], folder)
+        r["calls"] = direct_call_failures(config)
+    r["update"] = update_failures(ENTRIES[config["type"]].interior[0])
     results[config["type"]] = r
+checks = {}
+if variant != "llvm_ad_rgb":
+    checks["lambert vs diffuse"] = lambert_diffuse_difference(folder)
+if variant == "scalar_rgb":
+    checks["degenerate"] = [degenerate_lanes(mi.load_dict(c)) for c in degenerate_configs()]
+    # a plane seen straight on (orthographic: every viewer exactly at the
+    # normal), lit from straight behind: wo = -wi, the half vector 0
+    scene = mi.load_dict({
+        "type": "scene", "integrator": {"type": "path", "max_depth": 2},
+        "sensor": {"type": "orthographic", "film": {"type": "hdrfilm", "width": 2, "height": 2}},
+        "plane": {"type": "rectangle", "bsdf": {"type": "cook_torrance", "distribution": "ggx"},
+                  "to_world": mi.ScalarTransform4f().translate([0, 0, 1]).scale([1, -1, -1])},
+        "light": {"type": "directional", "direction": [0, 0, -1]}})
+    checks["lit from below"] = np.array(mi.render(scene), dtype=np.float64).ravel().tolist()
 if variant == "scalar_rgb":            # the same values as llvm_ad_rgb
     mi.set_variant("llvm_ad_rgb")
     mi_brdfs.register()
     for config, _ in cases:
         results[config["type"]]["llvm"] = lanes(mi.load_dict(config))
-print("RESULTS " + json.dumps(results))
+    checks["degenerate llvm"] = [degenerate_lanes(mi.load_dict(c)) for c in degenerate_configs()]
+print("RESULTS " + json.dumps({"plugins": results, "checks": checks}))
 '''
 
 
-def run_variant(variant: str) -> dict:
+def run_variant(variant: str, folder) -> tuple[dict, dict]:
+    """({plugin: its results}, {check: result}) of the script in ``variant``."""
     cases = variant_chi2_cases()
     run = subprocess.run([sys.executable, "-c", SCRIPT, variant, str(CHI2_ALPHA),
-                          str(chi2_test_count()), json.dumps(cases)],
+                          str(chi2_test_count()), json.dumps(cases),
+                          str(Path(__file__).parent), str(folder)],
                          capture_output=True, text=True, timeout=900)
     assert run.returncode == 0, run.stderr[-3000:]
     line = next(line for line in run.stdout.splitlines() if line.startswith("RESULTS "))
-    return json.loads(line[len("RESULTS "):])
+    results = json.loads(line[len("RESULTS "):])
+    return results["plugins"], results["checks"]
+
+
+def check_scenes_and_calls(variant: str, results: dict, checks: dict) -> None:
+    """Every parameter written through traverse; every property form, direct
+    calls, and lambert = diffuse for the same <spectrum> and <rgb> to float
+    precision (in llvm_ad_rgb: the battery and test_lambert check those)."""
+    for name, r in results.items():
+        assert not r["update"], f"{name} in {variant}:\n" + "\n".join(r["update"])
+    if variant == "llvm_ad_rgb":
+        return
+    for name, r in results.items():
+        assert not r["forms"], f"{name} in {variant}:\n" + "\n".join(r["forms"])
+        assert not r["calls"], f"{name} in {variant}:\n" + "\n".join(r["calls"])
+    assert checks["lambert vs diffuse"] < 1e-6, checks["lambert vs diffuse"]
+
+
+def check_degenerate(checks: dict) -> None:
+    """scalar_rgb at degenerate inputs: nothing raises, every value is finite
+    and non-negative (directions aside), and 0 wherever llvm_ad_rgb gives 0."""
+    for config, scalar, llvm in zip(degenerate_configs(), checks["degenerate"],
+                                    checks["degenerate llvm"]):
+        assert not scalar["errors"], f"{config}: " + "\n".join(scalar["errors"][:5])
+        for key, values in scalar.items():
+            if key == "errors":
+                continue
+            s, j = np.array(values), np.array(llvm[key])
+            assert np.isfinite(s).all() and (key == "sample wo" or (s >= 0).all()), (config, key)
+            lanes = np.flatnonzero(((j == 0) & (s != 0)).any(axis=1))
+            assert not lanes.size, (f"{config} {key}: 0 in llvm_ad_rgb, not in scalar_rgb at "
+                                    f"{[degenerate_inputs()[k] for k in lanes[:3]]}")
+    image = np.array(checks["lit from below"])
+    assert np.isfinite(image).all() and (image == 0).all()
 
 
 def check_lanes(lanes: dict) -> None:
@@ -154,9 +217,12 @@ def check_lanes(lanes: dict) -> None:
 
 @pytest.mark.slow
 @pytest.mark.parametrize("variant", CPU_VARIANTS + GPU_VARIANTS)
-def test_every_plugin_in_every_variant(variant):
-    results = run_variant(variant)
+def test_every_plugin_in_every_variant(variant, tmp_path):
+    results, checks = run_variant(variant, tmp_path)
     assert set(results) == {c[0]["type"] for c in variant_chi2_cases()}
+    check_scenes_and_calls(variant, results, checks)
+    if variant == "scalar_rgb":
+        check_degenerate(checks)
     for name, r in results.items():
         check_lanes(r["lanes"])
         assert r["chi2"], f"{name}: χ² rejected its sampler in {variant} (p = {r.get('p')})"
@@ -168,11 +234,14 @@ def test_every_plugin_in_every_variant(variant):
 
 
 @pytest.mark.parametrize("variant", POLARIZED)
-def test_polarized_variants_get_depolarizers(variant):
+def test_polarized_variants_get_depolarizers(variant, tmp_path):
     """eval and the sample weight are Mueller matrices with one non-zero entry,
-    the unpolarized value (the script asserts it lane by lane)."""
-    for name, r in run_variant(variant).items():
+    the unpolarized value (the script asserts it lane by lane); every property
+    form and direct call as in the other variants."""
+    results, checks = run_variant(variant, tmp_path)
+    for name, r in results.items():
         check_lanes(r["lanes"])
+    check_scenes_and_calls(variant, results, checks)
 
 
 def test_render_in_scalar_rgb(tmp_path):

@@ -85,10 +85,11 @@ class ParameterError(ValueError):
 class Param:
     """One plugin parameter: how it is read, checked, exposed and tested.
 
-    ``kind``: ``"spectrum"`` (float, rgb or any texture, evaluated per colour
-    channel), ``"scalar"`` (float or texture, evaluated as one value, e.g. a
-    roughness) or ``"float"`` (a plain number, an opaque Float; its traverse
-    key is the bare name). ``role``: ``"colour"`` and ``"weight"`` scale a lobe
+    ``kind``: ``"spectrum"`` (any form Mitsuba's own colours take: float, rgb,
+    spectrum, texture; evaluated per colour channel), ``"scalar"`` (the same
+    forms, evaluated as one value, e.g. a roughness) or ``"float"`` (a plain
+    number: an opaque Float, a float in a writable box in scalar variants; its
+    traverse key is the bare name). ``role``: ``"colour"`` and ``"weight"`` scale a lobe
     (their gradients are checked at their bounds too), ``"shape"`` shapes it.
     ``upper`` is the upper end of the range the tests probe when ``hi`` is
     unbounded (colours: 1, a white surface).
@@ -350,6 +351,12 @@ class Reader:
         return value
 
 
+def as_type(x, kind: type):
+    """``x`` as a ``kind`` (a Dr.Jit type): a direct call from Python may pass
+    a list, a tuple or a number, as Mitsuba's own bindings accept them."""
+    return x if isinstance(x, kind) else kind(x)
+
+
 def mean(spectrum) -> mi.Float:
     """Channel mean of a spectrum: the scalar weight used for lobe selection."""
     return dr.mean(spectrum, axis=0)
@@ -413,6 +420,7 @@ class BRDF:
                                'formulas are not normalised; compensation is for mode="hdr")')
         self.params: dict[str, Param] = {}     # the parameters read, by name
         self.live: set[str] = set()            # parameters updated or differentiated
+        self.boxes: dict = {}                  # scalar variants: plain numbers, writable
         self.read(reader)
         self.update_lobes()
 
@@ -455,6 +463,12 @@ class BRDF:
     def read_param(self, reader: Reader, p: Param):
         """Read ``p`` into ``self.m_<name>`` and remember it as present."""
         value = reader.read(p)
+        if p.kind == "float" and not dr.is_jit_v(mi.Float):
+            # Scalar variants: a plain number is a Python float, which traverse
+            # cannot hand out for writing; the box it hands out instead is read
+            # back in parameters_changed.
+            self.boxes[p.name] = dr.scalar.Array1f(value)
+            value = self.boxes[p.name][0]
         setattr(self, "m_" + p.name, value)
         self.params[p.name] = p
         if grad_enabled(value):
@@ -463,12 +477,15 @@ class BRDF:
 
     def traverse(self, cb):
         for name in self.params:
-            cb.put(name, getattr(self, "m_" + name), mi.ParamFlags.Differentiable)
+            value = self.boxes[name] if name in self.boxes else getattr(self, "m_" + name)
+            cb.put(name, value, mi.ParamFlags.Differentiable)
 
     def parameters_changed(self, keys=[]):
         """Check the changed parameters as at load time, mark them live, and
         decide again which lobes the scene requires."""
         names = {key.split(".")[0] for key in keys}
+        for name, box in self.boxes.items():       # scalar variants' plain numbers
+            setattr(self, "m_" + name, box[0])
         for name in names or self.params:
             p = self.params.get(name)
             if p is None:
@@ -621,6 +638,7 @@ class BRDF:
 
     # --- the BSDF interface --------------------------------------------------
     def sample(self, ctx, si, sample1, sample2, active=True):
+        sample1, sample2 = as_type(sample1, mi.Float), as_type(sample2, mi.Point2f)
         use = self.enabled(ctx)
         bs = dr.zeros(mi.BSDFSample3f)
         cos_i = mi.Frame3f.cos_theta(si.wi)
@@ -676,6 +694,7 @@ class BRDF:
         return bs, self.spectrum(dr.select(active, weight, 0.0))
 
     def eval(self, ctx, si, wo, active=True):
+        wo = as_type(wo, mi.Vector3f)
         use = self.enabled(ctx)
         if not any(use):
             return self.spectrum(mi.UnpolarizedSpectrum(0.0))
@@ -683,6 +702,7 @@ class BRDF:
         return self.spectrum(self.lobes(use, None, inp, si, wo, active, pdf=False)[0])
 
     def pdf(self, ctx, si, wo, active=True):
+        wo = as_type(wo, mi.Vector3f)
         use = self.enabled(ctx)
         if not any(use):
             return mi.Float(0.0)
@@ -691,6 +711,7 @@ class BRDF:
                           value=False)[1]
 
     def eval_pdf(self, ctx, si, wo, active=True):
+        wo = as_type(wo, mi.Vector3f)
         use = self.enabled(ctx)
         if not any(use):
             return self.spectrum(mi.UnpolarizedSpectrum(0.0)), mi.Float(0.0)
@@ -744,6 +765,35 @@ class BRDF:
         """What eval/sample return: the value itself, or a depolarizing Mueller
         matrix in polarized variants (as Mitsuba's ``diffuse`` does)."""
         return mi.depolarizer(value) if mi.is_polarized else value
+
+    # --- attributes, as Mitsuba's BSDF base class answers them ----------------------
+    # A texture parameter is looked up (eval, eval_1, eval_3); a plain number is an
+    # attribute whose value only eval_attribute_1 returns (the others give 0, as
+    # for a built-in's Float member); an unknown name gives 0 in JIT variants and
+    # raises in scalar ones. Written here because in scalar variants the base
+    # class sees a plain number as the box traverse hands out, not as a Float.
+    def has_attribute(self, name, active=True):
+        return mi.Bool(name in self.params)
+
+    def eval_attribute(self, name, si, active=True):
+        return self.attribute(name, si, active, "eval", mi.UnpolarizedSpectrum)
+
+    def eval_attribute_1(self, name, si, active=True):
+        return self.attribute(name, si, active, "eval_1", mi.Float)
+
+    def eval_attribute_3(self, name, si, active=True):
+        return self.attribute(name, si, active, "eval_3", mi.Color3f)
+
+    def attribute(self, name, si, active, method: str, kind: type):
+        p = self.params.get(name)
+        if p is None:
+            if not dr.is_jit_v(mi.Float):
+                raise RuntimeError(f"[{type(self).__name__}] Invalid attribute requested {name}.")
+            return dr.zeros(kind)
+        value = getattr(self, "m_" + name)
+        if p.kind != "float":
+            return getattr(value, method)(si, active)
+        return mi.Float(value) if kind is mi.Float else dr.zeros(kind)
 
     # --- description -------------------------------------------------------------
     def to_string(self):

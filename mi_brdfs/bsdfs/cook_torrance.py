@@ -10,11 +10,11 @@
      - Description
      - Default
    * - ``diffuse_reflectance``
-     - float, rgb or texture (∂)
+     - float, rgb, spectrum or texture (∂)
      - m_D, >= 0 (above 1 allowed: scanline mode clamps).
      - 0.5
    * - ``specular_reflectance``
-     - float, rgb or texture (∂)
+     - float, rgb, spectrum or texture (∂)
      - m_S, >= 0.
      - 1.0
    * - ``k``

@@ -10,7 +10,7 @@
      - Description
      - Default
    * - ``reflectance``
-     - float, rgb or texture (∂)
+     - float, rgb, spectrum or texture (∂)
      - m_D, the diffuse colour. Must be >= 0; values above 1 are allowed
        (scanline mode clamps the lobe to [0, 1]).
      - 0.5

@@ -98,9 +98,11 @@ def d_beckmann(m, alpha):
 def d_ggx(m, alpha):
     cos2, sin2 = _cos2_sin2(m)
     a2 = dr.square(alpha)
-    # clamp(n·h)² (rho² - 1) + 1, written as sin² + cos² rho² for float32 accuracy
-    d = a2 / (dr.pi * dr.square(sin2 + cos2 * a2))
-    return dr.select(m.z > 0, d, 0.0)
+    up = m.z > 0
+    # clamp(n·h)² (rho² - 1) + 1, written as sin² + cos² rho² for float32 accuracy;
+    # 0 only for the zero vector (the half vector of wo = -wi): a stand-in then
+    d = a2 / (dr.pi * dr.square(dr.select(up, sin2 + cos2 * a2, 1.0)))
+    return dr.select(up, d, 0.0)
 
 
 D = {"blinn": d_blinn, "beckmann": d_beckmann, "ggx": d_ggx}
@@ -132,7 +134,9 @@ def g1_ggx_over_cos(v, alpha):
     """G1(v) / cos θ_v for GGX: the lecture's 2/(1 + sqrt(1 + rho² tan²θ)) times
     cos/cos = 2 / (c + sqrt(c² + rho² sin²θ)): no tan², finite at c = 0."""
     c = dr.fmax(v.z, 0.0)
-    return 2.0 / (c + dr.sqrt(dr.square(c) + dr.square(alpha) * (dr.square(v.x) + dr.square(v.y))))
+    denom = c + dr.sqrt(dr.square(c) + dr.square(alpha) * (dr.square(v.x) + dr.square(v.y)))
+    # 0 only straight down or for the zero vector, where G1 = G1/c · c is 0 anyway
+    return 2.0 / dr.select(denom > 0, denom, 1.0)
 
 
 def g1_beckmann_over_cos(v, alpha):

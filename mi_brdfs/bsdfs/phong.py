@@ -10,11 +10,11 @@
      - Description
      - Default
    * - ``diffuse_reflectance``
-     - float, rgb or texture (∂)
+     - float, rgb, spectrum or texture (∂)
      - m_D, the diffuse colour, >= 0 (above 1 allowed: scanline mode clamps).
      - 0.5
    * - ``specular_reflectance``
-     - float, rgb or texture (∂)
+     - float, rgb, spectrum or texture (∂)
      - m_S, the specular colour, >= 0. With the default m_D + m_S = 1 the hdr
        model reflects at most all the light it receives.
      - 0.5

@@ -10,11 +10,11 @@
      - Description
      - Default
    * - ``diffuse_reflectance``
-     - float, rgb or texture (∂)
+     - float, rgb, spectrum or texture (∂)
      - m_D1, the lit colour (d·n >= t_D). >= 0; above 1 allowed (scanline clamps).
      - 0.8
    * - ``diffuse_shade``
-     - float, rgb or texture (∂)
+     - float, rgb, spectrum or texture (∂)
      - m_D2, the shade colour (d·n < t_D, lights behind the surface included).
      - 0.2
    * - ``diffuse_threshold``
@@ -22,11 +22,11 @@
      - t_D, compared with d·n.
      - 0.5
    * - ``specular_reflectance``
-     - float, rgb or texture (∂)
+     - float, rgb, spectrum or texture (∂)
      - m_S1, the highlight colour (cosine >= t_S).
      - 1.0
    * - ``specular_shade``
-     - float, rgb or texture (∂)
+     - float, rgb, spectrum or texture (∂)
      - m_S2, the colour outside the highlight (cosine < t_S).
      - 0.0
    * - ``specular_threshold``

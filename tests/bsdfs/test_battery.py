@@ -17,7 +17,8 @@ parameter declarations (``PARAMS``, ``OPTIONS``):
    load time and at ``params.update()``; bad options too;
 9. traverse and update; a lobe is dropped only when it cannot matter;
 10. every property form a Mitsuba scene gives a parameter, read as Mitsuba's
-    own plugins read it.
+    own plugins read it, and direct calls as Mitsuba's bindings take them
+    (the other variants: tests/test_variants.py).
 
 A model's own module keeps only its independent transcription of the lecture
 and what is particular to it.
@@ -36,7 +37,7 @@ from mi_brdfs.bsdfs import BY_NAME
 from mi_brdfs.bsdfs.base import ParameterError
 from mi_brdfs.tools.catalog import ENTRIES
 from support import (CHI2_ALPHA, albedo, assert_refused, chi2_test, chi2_test_count, config_id, evaluate,
-                     error_line, finite, finite_difference, floats, points,
+                     direct_call_failures, error_line, finite, finite_difference, floats, points,
                      f32, mirror_pairs, property_form_failures, random_hemisphere, surface, vec)
 
 PLUGINS = BY_NAME
@@ -553,7 +554,7 @@ def test_switches_exist():
 
 
 # ----------------------------------------------------------------------------
-#  10. Every property form
+#  10. Every property form, every direct call
 # ----------------------------------------------------------------------------
 
 @pytest.mark.parametrize("name", PLUGINS)
@@ -564,5 +565,13 @@ def test_every_property_form(name, tmp_path):
     plain number takes numbers only; wrong types and spectrum values out of
     range are refused with one line (support.property_form_failures)."""
     failures = property_form_failures(name, tmp_path)
+    assert not failures, "\n".join(failures)
+
+
+@pytest.mark.parametrize("name", PLUGINS)
+def test_direct_calls_as_mitsuba_takes_them(name):
+    """Lists and tuples for wo and sample2 (as Mitsuba's bindings take them
+    for its own plugins); has_attribute and eval_attribute* as for diffuse."""
+    failures = direct_call_failures({"type": name})
     assert not failures, "\n".join(failures)
 

@@ -3,6 +3,7 @@ lecture, a coloured albedo. What every model shares: the battery."""
 import numpy as np
 import pytest
 
+import drjit as dr
 import mitsuba as mi
 
 from support import (albedo, evaluate, floats, load_form, points, property_forms,
@@ -63,3 +64,15 @@ def test_albedo_is_the_reflectance():
     bsdf = mi.load_dict({"type": "lambert", "reflectance": rgb(colour)})
     for th in (0, 45, 85):
         np.testing.assert_allclose(albedo(bsdf, th), colour, rtol=0.01)
+
+
+def test_a_spectrum_above_1_keeps_its_colour():
+    """Colours above 1 are allowed (scanline mode clamps the lobe): a <spectrum>
+    above 1 becomes its unclipped sRGB colour (Mitsuba's own conversion, not
+    bounded), as the spectral variants keep its values; diffuse would clip it."""
+    bsdf = mi.load_string('<bsdf version="3.0.0" type="lambert">'
+                          '<spectrum name="reflectance" value="400:1.5, 700:2"/></bsdf>')
+    colour = np.array(bsdf.eval_attribute_3("reflectance", dr.zeros(mi.SurfaceInteraction3f)))
+    expected = mi.spectrum_list_to_srgb([400.0, 700.0], [1.5, 2.0], bounded=False, d65=True)
+    np.testing.assert_allclose(colour.ravel(), np.array(expected), rtol=1e-5)
+    assert colour.min() > 1.0

@@ -7,7 +7,8 @@ After switching variants, call ``mi_brdfs.register()``.
 
 Layout: :mod:`mi_brdfs.bsdfs` (the plugins and their shared formulas),
 :mod:`mi_brdfs.render` (integrator, passes, tone mapping, image I/O),
-:mod:`mi_brdfs.tools` (the command line and its reports). The tools are also
+:mod:`mi_brdfs.tools` (the command line and its reports),
+:mod:`mi_brdfs.scenes` (the bundled scenes: ``mi_brdfs.scenes.path("phong")``). The tools are also
 reachable as ``mi_brdfs.compare``, ``.validate``, ``.bench``, ``.analysis``
 and ``.catalog`` (imported on first use).
 """
@@ -20,15 +21,15 @@ import mitsuba as mi         # noqa: E402
 _llvm.check()
 
 from . import bsdfs                       # noqa: E402
-from .bsdfs import (PLUGINS, Blinn, CookTorrance, Lambert, OrenNayar,  # noqa: E402
-                    Phong, Toon, Ward)
+from .bsdfs import *                      # noqa: E402,F401,F403  (PLUGINS and every plugin class)
 from .render import integrator            # noqa: E402
+from . import scenes                      # noqa: E402  (the bundled scenes: scenes.path("phong"))
 
 DEFAULT_VARIANT = "llvm_ad_rgb"
 TOOLS = ("compare", "validate", "bench", "analysis", "catalog", "cli")
 
-__all__ = ["register", "PLUGINS", "DEFAULT_VARIANT", "Lambert", "OrenNayar", "Toon", "Phong",
-           "Blinn", "Ward", "CookTorrance", *TOOLS]
+__all__ = ["register", "scenes", "PLUGINS", "DEFAULT_VARIANT",
+           *(cls.__name__ for cls in bsdfs.PLUGINS), *TOOLS]
 
 
 def register() -> str:

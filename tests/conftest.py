@@ -3,7 +3,18 @@ import numpy as np
 import pytest
 
 import mi_brdfs  # noqa: F401  (LLVM set-up, variant, plugin registration)
+from support import BrokenEntry
 from support import evaluate, random_hemisphere, surface, vec  # noqa: F401  (for older modules)
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_pyfunc_call(pyfuncitem):
+    """A case standing for a catalog entry that could not be built fails, with
+    that entry's error (see test_battery.from_entries)."""
+    for value in pyfuncitem.funcargs.values():
+        if isinstance(value, BrokenEntry):
+            raise RuntimeError(f"the catalog entry of {value.name} cannot be built: "
+                               f"{type(value.error).__name__}: {value.error}") from value.error
 
 
 @pytest.fixture

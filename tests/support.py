@@ -470,11 +470,29 @@ def variant_chi2_cases() -> list[tuple[dict, float]]:
 
 def chi2_test_count() -> int:
     """Every χ² test of the suite, for one Šidák correction: the battery's
-    catalog runs and negative controls, and the variants'."""
-    from mi_brdfs.tools.catalog import ENTRIES
-    battery = sum(len(c.thetas) for e in ENTRIES.values() for c in e.chi2)
-    negative = sum(1 for e in ENTRIES.values() if e.negative)
+    catalog runs and negative controls, and the variants'. (An entry that
+    cannot be built runs none: its own tests fail.)"""
+    from mi_brdfs.tools import catalog
+    entries = []
+    for cls in mi_brdfs.PLUGINS:
+        try:
+            entries.append(catalog.entry(cls.name))
+        except Exception:
+            pass
+    battery = sum(len(c.thetas) for e in entries for c in e.chi2)
+    negative = sum(1 for e in entries if e.negative)
     return battery + negative + len(CPU_VARIANTS + GPU_VARIANTS) * len(mi_brdfs.PLUGINS)
+
+
+class BrokenEntry:
+    """Stands for the test cases of a plugin whose catalog entry cannot be
+    built: conftest's pytest_pyfunc_call fails each such case with the error."""
+
+    def __init__(self, name: str, error: Exception):
+        self.name, self.error = name, error
+
+    def __repr__(self) -> str:
+        return f"BrokenEntry({self.name!r})"
 
 
 def chi2_test(sample_config: dict, pdf_config: dict, theta_deg: float, phi_deg: float = 0.0,

@@ -11,9 +11,9 @@ NOTEBOOKS = Path(__file__).resolve().parent.parent / "notebooks"
 ALL = sorted(p.stem for p in NOTEBOOKS.glob("*.py"))
 
 
-def test_there_are_five_notebooks():
+def test_there_are_six_notebooks():
     assert ALL == ["01_models", "02_lobes", "03_validation", "04_speed_vs_accuracy",
-                   "05_fit_with_gradients"]
+                   "05_fit_with_gradients", "06_which_model"]
 
 
 @pytest.mark.parametrize("name", ALL)

@@ -21,6 +21,7 @@ FIGURE = {                      # which figure (index among the notebook's PNG o
     "03_validation": 0,
     "04_speed_vs_accuracy": 0,
     "05_fit_with_gradients": -1,   # the texture recovery
+    "06_which_model": 0,        # the Pareto fronts
 }
 
 

@@ -19,9 +19,15 @@ from .phong import Phong
 from .toon import Toon
 from .ward import Ward
 
-# In the lecture's order: diffuse models, then specular ones.
+# The registry, in the lecture's order: diffuse models, then specular ones.
+# Everything else derives from it: the package's exports, the plugins
+# registered with Mitsuba, the catalog's entries (tools/catalog.py), the lobe
+# plots, the bench's models and the tests (tests/bsdfs/test_registry.py says
+# where a model is missing).
 PLUGINS = (Lambert, OrenNayar, Toon, Phong, Blinn, Ward, CookTorrance)
 BY_NAME = {cls.name: cls for cls in PLUGINS}     # plugin name -> class
+
+__all__ = ["PLUGINS", "BY_NAME", *(cls.__name__ for cls in PLUGINS)]
 
 
 def register() -> None:

@@ -77,6 +77,11 @@ class ParameterError(ValueError):
     """A plugin parameter has a bad value (raised at load time or at update())."""
 
 
+class DeclarationError(TypeError):
+    """A model's Param or Option declaration is malformed (raised when its
+    class is defined, i.e. when the module is imported)."""
+
+
 # ----------------------------------------------------------------------------
 #  Parameters: declaration, reading, checking
 # ----------------------------------------------------------------------------
@@ -92,7 +97,8 @@ class Param:
     traverse key is the bare name). ``role``: ``"colour"`` and ``"weight"`` scale a lobe
     (their gradients are checked at their bounds too), ``"shape"`` shapes it.
     ``upper`` is the upper end of the range the tests probe when ``hi`` is
-    unbounded (colours: 1, a white surface).
+    unbounded (colours: 1, a white surface). Checked when declared: a known
+    kind and role, lo <= default <= hi (DeclarationError otherwise).
     """
     name: str
     default: float
@@ -101,6 +107,27 @@ class Param:
     kind: str = "spectrum"
     role: str = "colour"
     upper: float | None = None
+
+    KINDS = ("spectrum", "scalar", "float")
+    ROLES = ("colour", "weight", "shape")
+
+    def __post_init__(self):
+        def refuse(what: str):
+            raise DeclarationError(f"Param {self.name!r}: {what}")
+        if self.kind not in self.KINDS:
+            refuse(f"kind {self.kind!r} is unknown; valid: {', '.join(self.KINDS)}")
+        if self.role not in self.ROLES:
+            refuse(f"role {self.role!r} is unknown; valid: {', '.join(self.ROLES)}")
+        if self.lo is not None and self.hi is not None and not self.lo < self.hi:
+            refuse(f"empty range {self.valid()}")
+        if not (isinstance(self.default, (int, float)) and not isinstance(self.default, bool)
+                and math.isfinite(self.default)
+                and (self.lo is None or self.default >= self.lo)
+                and (self.hi is None or self.default <= self.hi)):
+            refuse(f"default {self.default!r} is outside its range {self.valid()}")
+        if self.upper is not None and not ((self.lo is None or self.upper > self.lo)
+                                           and (self.hi is None or self.upper <= self.hi)):
+            refuse(f"upper {self.upper!r} is outside its range {self.valid()}")
 
     def valid(self) -> str:
         return f"[{_fmt(self.lo, '-inf')}, {_fmt(self.hi, 'inf')}]"
@@ -119,10 +146,24 @@ class Param:
 @dataclass(frozen=True)
 class Option:
     """A non-differentiable choice: one of ``choices`` (strings), or a boolean
-    when ``default`` is a bool. Read at load time into ``self.<name>``."""
+    when ``default`` is a bool. Read at load time into ``self.<name>``.
+    Checked when declared: the default is one of the choices, or a bool
+    without choices (DeclarationError otherwise)."""
     name: str
     default: str | bool
     choices: tuple[str, ...] = ()
+
+    def __post_init__(self):
+        if isinstance(self.default, bool):
+            if self.choices:
+                raise DeclarationError(f"Option {self.name!r}: a boolean has no choices")
+        elif not (isinstance(self.choices, tuple) and self.choices
+                  and all(isinstance(c, str) for c in self.choices)):
+            raise DeclarationError(f"Option {self.name!r}: choices must be a tuple of strings, "
+                                   f"not {self.choices!r}")
+        elif self.default not in self.choices:
+            raise DeclarationError(f"Option {self.name!r}: default {self.default!r} is not one "
+                                   f"of its choices ({', '.join(self.choices)})")
 
     def valid(self) -> str:
         if isinstance(self.default, bool):
@@ -425,6 +466,15 @@ class BRDF:
         self.update_lobes()
 
     def __init_subclass__(cls, **kwargs):     # (no super(): bind() copies this body)
+        # The declarations, checked when the class is defined.
+        for what, items, kind in (("PARAMS", cls.PARAMS, Param), ("OPTIONS", cls.OPTIONS, Option)):
+            for item in items:
+                if not isinstance(item, kind):
+                    raise DeclarationError(f"{cls.__name__}.{what}: {item!r} is not a {kind.__name__}")
+        names = [p.name for p in cls.PARAMS] + [o.name for o in cls.options()]
+        for name in names:
+            if names.count(name) > 1:
+                raise DeclarationError(f"{cls.__name__}: {name!r} is declared twice")
         # Options and the base's state as properties: read at every traced call,
         # ~0.07 us each against ~0.5 us through __getattr__.
         for name in STATE + tuple(o.name for o in cls.options()):

@@ -23,8 +23,6 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-WARPS = ("linear", "sqrt", "log1p")
-
 
 @dataclass(frozen=True)
 class Axis:

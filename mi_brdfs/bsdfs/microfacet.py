@@ -235,10 +235,6 @@ def g1(distribution: str, v, alpha):
     return G1_OVER_COS[distribution](v, alpha) * dr.fmax(v.z, 0.0)
 
 
-def g_smith(distribution, wi, wo, alpha):
-    return g1(distribution, wi, alpha) * g1(distribution, wo, alpha)
-
-
 # ----------------------------------------------------------------------------
 #  Sampling microfacet normals
 # ----------------------------------------------------------------------------

@@ -98,8 +98,8 @@ edge is the cosine -1 and right edge +1 — looked up at uv = ((cos + 1)/2, 0.5)
 Use ``wrap_mode`` ``clamp``; ``filter_type`` ``nearest`` gives hard bands,
 ``bilinear`` smooth ones; ``raw`` true keeps the colours as stored.
 
-Sampling. Diffuse: the uniform hemisphere (the issue asked for the cosine
-hemisphere, but the toon colour carries no cos theta_o, so cosine sampling
+Sampling. Diffuse: the uniform hemisphere (not the cosine hemisphere of the
+other diffuse lobes: the toon colour carries no cos theta_o, so cosine sampling
 would give weights 1/cos theta_o of infinite variance: fireflies). Specular: a
 uniform cone that covers the highlight — around the mirror direction of ω_r
 with cos(half-angle) = t_S - w/2 (phong), or of half vectors around n with

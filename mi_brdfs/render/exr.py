@@ -1,4 +1,5 @@
-"""Linear float RGB images in and out of OpenEXR files (OpenEXR 3.x ``File`` API),
+"""Linear float images in and out of OpenEXR files (OpenEXR 3.x ``File`` API):
+RGB, RGBA, mono (Y) and multi-layer files (AOVs, ``NAME.R``) read alike,
 and atomic writes: a file appears at its target path complete or not at all,
 with the mode the umask gives a new file (0644 under umask 022), as Mitsuba's
 own files have: not the 0600 of a temporary file."""
@@ -87,19 +88,64 @@ def write_channels(path: str, channels: Mapping[str, np.ndarray],
     write_atomically(path, write)
 
 
-def read_exr(path: str) -> np.ndarray:
-    """Read an EXR's RGB channels as an (H, W, 3) float32 array."""
+# The channels that make a layer's colour, in the order they are returned:
+# R, G, B (a colour render), Y (a mono variant's luminance, repeated in the
+# three channels), X, Y, Z (a vector AOV such as normals), or a single channel
+# of any name (a depth AOV's T, repeated).
+COLOUR_SETS = (("R", "G", "B"), ("X", "Y", "Z"), ("Y",))
+
+
+def read_channels(path: str) -> dict[str, np.ndarray]:
+    """Every channel of an EXR file as {name: (H, W) float32 array}."""
     if not os.path.exists(path):
         raise FileNotFoundError(f"no such file: {path}")
     try:
-        with OpenEXR.File(path) as f:
-            channels = f.channels()
-            if "RGB" in channels:
-                return np.asarray(channels["RGB"].pixels, dtype=np.float32)
-            if all(c in channels for c in "RGB"):
-                return np.stack([channels[c].pixels for c in "RGB"], axis=-1).astype(np.float32)
-            if "RGBA" in channels:
-                return np.asarray(channels["RGBA"].pixels[..., :3], dtype=np.float32)
-            raise ValueError(f"{path}: no R, G, B channels (has {', '.join(channels)})")
+        with OpenEXR.File(path, separate_channels=True) as f:
+            return {name: np.asarray(c.pixels, dtype=np.float32)
+                    for name, c in f.channels().items()}
     except (RuntimeError, OSError) as error:
         raise ValueError(f"{path}: not a readable EXR file ({error})") from None
+
+
+def layers(channels) -> dict[str, list[str]]:
+    """{layer: its channels' short names} of an EXR's channel names: ``nn.X``
+    is channel X of layer ``nn``, ``dd.y.T`` channel T of ``dd.y``, and
+    ``R`` a channel of the unnamed base layer ``""``."""
+    out: dict[str, list[str]] = {}
+    for name in channels:
+        layer, _, short = name.rpartition(".")
+        out.setdefault(layer, []).append(short)
+    return out
+
+
+def layer_names(channels) -> str:
+    """The layers of an EXR for an error message: ``(base), albedo, nn``."""
+    return ", ".join(name or "(base)" for name in sorted(layers(channels)))
+
+
+def read_exr(path: str, layer: str | None = None) -> np.ndarray:
+    """An EXR's image as (H, W, 3) float32: the colour of ``layer`` (None or
+    "": the base layer, the render itself), as :data:`COLOUR_SETS` says.
+    Reads what ``mi-brdfs render`` writes in every variant (R, G, B; R, G,
+    B, A; Y) and its AOV layers. ValueError names the layers there are."""
+    channels = read_channels(path)
+    name = layer or ""
+    found = layers(channels)
+    shown = f"layer {layer!r}" if layer else "the base layer"
+    if name not in found:
+        raise ValueError(f"{path}: no {shown}; its layers: {layer_names(channels)}")
+    present = found[name]
+    full = (lambda c: f"{name}.{c}") if name else (lambda c: c)
+    for colour in COLOUR_SETS:
+        if all(c in present for c in colour):
+            planes = [channels[full(c)] for c in colour]
+            break
+    else:
+        plain = [c for c in present if c != "A"]
+        if len(plain) != 1:
+            raise ValueError(f"{path}: {shown} has channels {', '.join(sorted(present))}, "
+                             "none of R, G, B / X, Y, Z / Y / a single channel")
+        planes = [channels[full(plain[0])]]
+    if len(planes) == 1:
+        planes = planes * 3
+    return np.stack(planes, axis=-1).astype(np.float32)

@@ -5,7 +5,8 @@ extension       what is written
 ==============  ==============================================================
 ``.exr``        every film channel (RGB and AOVs such as an ``aov``
                 integrator's depth or normals) as float32, with metadata
-                (scene file, spp, seed, passes, variant, versions)
+                (scene file, the spp and passes rendered, seed, variant,
+                versions)
 ``.png``        the RGB channels tone-mapped (:mod:`.tonemap`) to 8-bit sRGB
 ``.jpg/.jpeg``  the same, as JPEG
 ==============  ==============================================================
@@ -43,15 +44,16 @@ def channel_names(film_names: Sequence[str], count: int) -> list[str]:
     channels (``film.bitmap()`` after rendering).
 
     Usually they are the same list. Mitsuba's ``aov`` integrator differs: its
-    film holds R, G, B(, A), then each nested integrator's ``NAME.R/G/B/A``,
-    then the AOVs, but ``mi.render`` returns each nested integrator's image
-    (RGB(A)) followed by the AOVs. The first nested image is the render
-    itself and is named R, G, B(, A); the others keep ``NAME.``. Any other
+    film holds R, G, B(, A) (Y in mono variants), then each nested
+    integrator's ``NAME.R/G/B/A``, then the AOVs, but ``mi.render`` returns
+    each nested integrator's image in the film's base channels (R, G, B(, A)
+    or Y) followed by the AOVs. The first nested image is the render itself
+    and is named as the base channels; the others keep ``NAME.``. Any other
     mismatch gives generic names ``C0, C1, ...``."""
     names = list(film_names)
     if len(names) == count:
         return names
-    base = [n for n in names[:4] if n in ("R", "G", "B", "A")]
+    base = [n for n in names[:4] if n in ("R", "G", "B", "A", "Y")]
     rest, groups = names[len(base):], []
     while len(rest) >= 4 and rest[0].endswith(".R"):
         prefix = rest[0][:-2]

@@ -1,29 +1,38 @@
 """The configurations the tests, the validation report and the benchmarks run, in one place.
 
-Each registered plugin has an :class:`Entry`: the conformance battery
-(``tests/bsdfs/test_battery.py``) runs every plugin through it — χ² of the
-sampler, weight × pdf = eval, the white furnace, the numerical extremes,
-gradients, bad input — so adding a model means adding its entry here (see
-CONTRIBUTING.md). Configurations are plugin dictionaries; one without a
-``mode`` is run in both modes where that makes sense (consistency, extremes),
-one with a ``mode`` as given. Colours are white (1) where energy is measured,
-so the albedo is the fraction of light reflected.
+Each plugin of the registry (:data:`mi_brdfs.bsdfs.PLUGINS`) has an
+:class:`Entry`, made by the function that :func:`builds` it: the conformance
+battery (``tests/bsdfs/test_battery.py``) runs every plugin through it — χ² of
+the sampler, weight × pdf = eval, the white furnace, the numerical extremes,
+gradients, bad input — and the lobe plots and the benchmarks' model costs come
+from it too, so adding a model means adding its entry here (see
+CONTRIBUTING.md). Entries are built on first use (:func:`entry`), one model at
+a time: a broken entry is an error for its own model only. Configurations are
+plugin dictionaries; one without a ``mode`` is run in both modes where that
+makes sense (consistency, extremes), one with a ``mode`` as given. Colours are
+white (1) where energy is measured, so the albedo is the fraction of light
+reflected.
 
-``mi-brdfs validate`` shows the first configurations of :data:`FURNACE`,
-:data:`CHI2` and :data:`LOBES`; ``mi-brdfs bench`` runs :func:`bench_models`
-and :data:`BENCH_SAMPLING`.
+``mi-brdfs validate`` shows the configurations of :data:`FURNACE`,
+:func:`report_chi2` (every χ² test of the battery; the representative ones
+with ``--quick``), :data:`NEGATIVE` and :data:`LOBES`; ``mi-brdfs bench`` runs
+:func:`bench_models` and the ``BENCH_*`` configurations at the end of this module.
 """
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
+from typing import Callable
+
+from ..bsdfs import BY_NAME
 
 HALF_PI = 0.5 * math.pi
 DISTRIBUTIONS = ("blinn", "beckmann", "ggx")
 GEOMETRIES = ("cook_torrance", "smith")
 THETAS_LOW = (0, 15, 30, 45, 60, 75)
 THETAS_GRAZING = (80, 85, 88, 89)
-THETAS_COMPENSATED = (0, 30, 60, 75, 85)      # the issue's range, 0°–85°
+THETAS_COMPENSATED = (0, 30, 60, 75, 85)      # where compensation promises albedo 1
 
 
 @dataclass(frozen=True)
@@ -34,6 +43,7 @@ class Chi2:
     ires: int = 16                 # pdf sub-samples per cell and axis (sharp lobes: more)
     res: int = 201
     phi: float = 0.0               # the viewer's azimuth
+    quick: bool = False            # in ``validate --quick``: representative of its model
 
 
 @dataclass(frozen=True)
@@ -67,6 +77,53 @@ class Entry:
     reciprocity: list[dict] = field(default_factory=list)   # beyond ``interior`` (hdr)
     lobe_width: float = 0.3              # where to put light directions for gradient checks
     extra: dict = field(default_factory=dict)
+    lobe: dict | None = None             # the lobe plot's configuration (None: the defaults)
+    bench: list[tuple[str, dict]] | None = None   # (label, config) whose render cost the
+                                                  # bench compares (None: the defaults)
+
+
+BUILDERS: dict[str, Callable[[str], Entry]] = {}      # plugin name -> what builds its entry
+_BUILT: dict[str, Entry] = {}
+
+
+def builds(*names: str):
+    """Decorator: the function (called with the plugin's name) makes the Entry
+    of each of these plugins."""
+    def register(builder: Callable[[str], Entry]):
+        for name in names:
+            BUILDERS[name] = builder
+            _BUILT.pop(name, None)
+        return builder
+    return register
+
+
+def entry(name: str) -> Entry:
+    """The Entry of plugin ``name``, built on first use."""
+    if name not in _BUILT:
+        if name not in BUILDERS:
+            raise LookupError(f"plugin {name!r} has no catalog entry: add a function "
+                              f"@builds({name!r}) to mi_brdfs/tools/catalog.py (CONTRIBUTING.md)")
+        _BUILT[name] = BUILDERS[name](name)
+    return _BUILT[name]
+
+
+class _Entries(Mapping):
+    """Every registered plugin's Entry, in the registry's order, each built on
+    first use (so that iterating the names builds nothing)."""
+
+    def __getitem__(self, name: str) -> Entry:
+        if name not in BY_NAME:
+            raise KeyError(name)
+        return entry(name)
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(BY_NAME)
+
+    def __len__(self) -> int:
+        return len(BY_NAME)
+
+
+ENTRIES: Mapping[str, Entry] = _Entries()
 
 
 def rgb(c) -> dict:
@@ -86,15 +143,19 @@ def toon_ramp(colours, filter_type: str = "bilinear") -> dict:
 #  lambert
 # ----------------------------------------------------------------------------
 
-def _lambert() -> Entry:
+@builds("lambert")
+def _lambert(name: str) -> Entry:
     return Entry(
-        chi2=[Chi2({"type": "lambert", "mode": m}, (0, 85)) for m in ("hdr", "scanline")],
+        chi2=[Chi2({"type": "lambert", "mode": m}, (0, 85), quick=m == "hdr")
+              for m in ("hdr", "scanline")],
         consistency=[{"type": "lambert"},
                      {"type": "lambert", "mode": "scanline", "reflectance": rgb([1.7, 0.6, 0.2])}],
         furnace=[Furnace("m_D = 1", {"type": "lambert", "reflectance": 1.0}, lo=1.0, hi=1.0,
                          tol=0.01)],
         extremes=[{"type": "lambert"}, {"type": "lambert", "reflectance": 0.0}],
         interior=[{"type": "lambert", "reflectance": 0.4}],
+        lobe={"type": "lambert", "reflectance": 0.8},
+        bench=[("lambert", {"type": "lambert", "reflectance": 0.6})],
     )
 
 
@@ -102,11 +163,12 @@ def _lambert() -> Entry:
 #  oren_nayar
 # ----------------------------------------------------------------------------
 
-def _oren_nayar() -> Entry:
+@builds("oren_nayar")
+def _oren_nayar(name: str) -> Entry:
     on = {"type": "oren_nayar"}
     eon = {**on, "energy_compensation": True}
     return Entry(
-        chi2=[Chi2({**on, "sigma": s, "method": m}, res=101)
+        chi2=[Chi2({**on, "sigma": s, "method": m}, res=101, quick=s == 0.5)
               for s, m in [(0.0, "exact"), (0.5, "table"), (HALF_PI, "exact")]]
         + [Chi2({**on, "sigma": 1.0, "mode": "scanline", "reflectance": rgb([2.0, 0.5, 0.1])},
                 (60,), res=101),
@@ -130,6 +192,8 @@ def _oren_nayar() -> Entry:
         reciprocity=[{**on, "sigma": s, "method": m, "reflectance": rgb([0.9, 0.5, 0.2])}
                      for m in ("exact", "table") for s in (0.3, 1.2)]
         + [{**eon, "sigma": s, "reflectance": rgb([0.9, 0.5, 0.2])} for s in (0.3, 1.2)],
+        lobe={**on, "reflectance": 0.8, "sigma": 0.8},
+        bench=[(f"oren_nayar {m}", {**on, "sigma": 0.5, "method": m}) for m in ("exact", "table")],
     )
 
 
@@ -159,11 +223,14 @@ def _toon_chi2_configs() -> list[dict]:
     return configs
 
 
-def _toon() -> Entry:
+@builds("toon")
+def _toon(name: str) -> Entry:
     t = {"type": "toon"}
     chi2_configs = _toon_chi2_configs()
     return Entry(
-        chi2=[Chi2(c, (0, 30, 60, 85), ires=32) for c in chi2_configs],
+        chi2=[Chi2(c, (0, 30, 60, 85), ires=32,
+                   quick=c == {**t, "specular_model": "phong"} or "diffuse_ramp" in c)
+              for c in chi2_configs],
         consistency=chi2_configs + [{**t, "specular_threshold": 1.0},
                                     {**t, "smoothness": 2.0, "specular_shade": 0.1}],
         furnace=[
@@ -188,6 +255,11 @@ def _toon() -> Entry:
                   {**t, "diffuse_reflectance": 0.0, "diffuse_shade": 0.0,
                    "specular_threshold": 0.94}, 30),
         lobe_width=0.6,
+        lobe={**t, "smoothness": 0.1},
+        bench=[("toon", dict(t)),
+               ("toon with ramps", {**t, "diffuse_ramp": toon_ramp([[0.1] * 3, [0.1] * 3,
+                                                                    [0.4] * 3, [0.8] * 3]),
+                                    "specular_ramp": toon_ramp([[0.0] * 3] * 7 + [[1.0] * 3])})],
     )
 
 
@@ -195,9 +267,11 @@ def _toon() -> Entry:
 #  phong and blinn
 # ----------------------------------------------------------------------------
 
+@builds("phong", "blinn")
 def _exponent_model(name: str) -> Entry:
     b = {"type": name}
-    chi2 = [Chi2({**b, "exponent": g, "diffuse_reflectance": m_d}, (0, 30, 60, 85), ires=64)
+    chi2 = [Chi2({**b, "exponent": g, "diffuse_reflectance": m_d}, (0, 30, 60, 85), ires=64,
+                 quick=(g, m_d) in ((100.0, 0.5), (1e3, 0.0)))
             for g in (0.0, 1.0, 10.0, 100.0, 1e3) for m_d in (0.0, 0.5)]
     chi2 += [Chi2({**b, "exponent": 1e4, "diffuse_reflectance": 0.0}, (30, 60, 85), ires=64),
              # scanline weights pick the lobes differently; coloured lobes
@@ -246,6 +320,8 @@ def _exponent_model(name: str) -> Entry:
         reciprocity=[{**b, "diffuse_reflectance": rgb([1.4, 0.5, 0.2]), "exponent": g,
                       "specular_reflectance": rgb([0.9, 2.0, 0.3])}
                      for g in (0.0, 1.0, 30.0, 1e3)],
+        lobe={**b, "diffuse_reflectance": 0.3, "specular_reflectance": 0.6, "exponent": 30},
+        bench=[(name, {**b, "exponent": 50})],
     )
 
 
@@ -256,11 +332,13 @@ def _exponent_model(name: str) -> Entry:
 WARD_ALPHAS = [(1e-3, 0.5), (0.5, 1e-3), (0.0, 0.0), (1e-4, 1e-4), (1.0, 1.0), (0.2, 0.2)]
 
 
-def _ward() -> Entry:
+@builds("ward")
+def _ward(name: str) -> Entry:
     w = {"type": "ward"}
     # viewers at azimuth 30°, not along t or b: the anisotropic lobe is asymmetric
     chi2 = [Chi2({**w, "alpha_u": at, "alpha_v": ab, "diffuse_reflectance": m_d},
-                 (0, 30, 60, 85), phi=30.0)
+                 (0, 30, 60, 85), phi=30.0,
+                 quick=(at, ab, m_d) in ((0.05, 0.3, 0.5), (0.05, 0.05, 0.0)))
             for at, ab in ((0.1, 0.1), (0.05, 0.3), (0.3, 0.05), (0.5, 0.5), (0.05, 0.05))
             for m_d in (0.0, 0.5)]
     chi2 += [Chi2({**w, "alpha_u": 0.15, "alpha_v": 0.04, "mode": "scanline",
@@ -305,6 +383,10 @@ def _ward() -> Entry:
         reciprocity=[{**w, "alpha_u": 0.05, "alpha_v": 0.3, "formula": f,
                       "diffuse_reflectance": rgb([0.5, 0.2, 0.1])} for f in ("vectors", "angles")]
         + [{**w, "alpha": 0.3, "energy_compensation": True}],
+        lobe={**w, "diffuse_reflectance": 0.3, "specular_reflectance": 0.6, "alpha_u": 0.1,
+              "alpha_v": 0.3},
+        bench=[(f"ward {f}", {**w, "alpha_u": 0.1, "alpha_v": 0.3, "formula": f})
+               for f in ("vectors", "angles")],
     )
 
 
@@ -312,9 +394,11 @@ def _ward() -> Entry:
 #  cook_torrance
 # ----------------------------------------------------------------------------
 
-def _cook_torrance() -> Entry:
+@builds("cook_torrance")
+def _cook_torrance(name: str) -> Entry:
     c = {"type": "cook_torrance"}
-    chi2 = [Chi2({**c, "distribution": d, "alpha": a, "k": k}, (0, 45, 85))
+    chi2 = [Chi2({**c, "distribution": d, "alpha": a, "k": k}, (0, 45, 85),
+                 quick=(d, a, k) in (("ggx", 0.1, 0.5), ("beckmann", 0.5, 0.0)))
             for d in DISTRIBUTIONS for a in (0.1, 0.5) for k in (0.0, 0.5)]
     chi2 += [
         # The Smith term and the scanline clamp change the weights, not the sampler.
@@ -395,19 +479,19 @@ def _cook_torrance() -> Entry:
         + [{**c, "distribution": d, "geometry": "smith", "alpha": 0.6, "k": 0.0,
             "energy_compensation": True, "specular_reflectance": rgb([0.95, 0.64, 0.54])}
            for d in DISTRIBUTIONS],
+        lobe={**c, "distribution": "ggx", "alpha": 0.3, "k": 0.3, "f0": 0.5,
+              "diffuse_reflectance": 0.8},
+        bench=[(f"cook_torrance {d} {g}", {**c, "distribution": d, "geometry": g, "alpha": 0.3})
+               for d in DISTRIBUTIONS for g in GEOMETRIES],
     )
-
-
-ENTRIES: dict[str, Entry] = {
-    "lambert": _lambert(), "oren_nayar": _oren_nayar(), "toon": _toon(),
-    "phong": _exponent_model("phong"), "blinn": _exponent_model("blinn"),
-    "ward": _ward(), "cook_torrance": _cook_torrance(),
-}
 
 
 # ----------------------------------------------------------------------------
 #  What the validation report shows
 # ----------------------------------------------------------------------------
+#
+# FURNACE, NEGATIVE and LOBES are derived from the entries on first use (module
+# __getattr__ below): importing the catalog builds no entry.
 
 # White furnace: for each model, its first three uncompensated configurations
 # (label, config without mode). The report runs each in both modes and, for a
@@ -426,41 +510,60 @@ def promises_one(name: str, config: dict) -> bool:
                for f in ENTRIES[name].furnace)
 
 
-FURNACE: dict[str, list[tuple[str, dict]]] = {name: _report_furnace(name) for name in ENTRIES}
-FURNACE["cook_torrance"] = [
-    ("GGX, Smith, alpha = 1, k = 0, F0 = 1",
-     {"type": "cook_torrance", "distribution": "ggx", "geometry": "smith", "alpha": 1.0,
-      "k": 0.0, "f0": 1.0, "specular_reflectance": 1.0}),
-    ("Blinn D, Smith (Blinn G1), alpha = 1, k = 0, F0 = 1",
-     {"type": "cook_torrance", "distribution": "blinn", "geometry": "smith", "alpha": 1.0,
-      "k": 0.0, "f0": 1.0, "specular_reflectance": 1.0}),
-    ("Beckmann, V-cavity, alpha = 0.3, k = 0.5, F0 = 1",
-     {"type": "cook_torrance", "distribution": "beckmann", "alpha": 0.3, "k": 0.5,
-      "f0": 1.0, "diffuse_reflectance": 1.0, "specular_reflectance": 1.0}),
-]
+def _furnace() -> dict[str, list[tuple[str, dict]]]:
+    furnace = {name: _report_furnace(name) for name in ENTRIES}
+    furnace["cook_torrance"] = [
+        ("GGX, Smith, alpha = 1, k = 0, F0 = 1",
+         {"type": "cook_torrance", "distribution": "ggx", "geometry": "smith", "alpha": 1.0,
+          "k": 0.0, "f0": 1.0, "specular_reflectance": 1.0}),
+        ("Blinn D, Smith (Blinn G1), alpha = 1, k = 0, F0 = 1",
+         {"type": "cook_torrance", "distribution": "blinn", "geometry": "smith", "alpha": 1.0,
+          "k": 0.0, "f0": 1.0, "specular_reflectance": 1.0}),
+        ("Beckmann, V-cavity, alpha = 0.3, k = 0.5, F0 = 1",
+         {"type": "cook_torrance", "distribution": "beckmann", "alpha": 0.3, "k": 0.5,
+          "f0": 1.0, "diffuse_reflectance": 1.0, "specular_reflectance": 1.0}),
+    ]
+    return furnace
 
-# Sampling: (label, config, incident angles in degrees) per model.
-CHI2: dict[str, list[tuple[str, dict, tuple[float, ...]]]] = {
-    name: [(", ".join(f"{k} = {v}" for k, v in c.config.items()
-                      if k != "type" and not isinstance(v, dict)) or "defaults",
-            c.config, tuple(c.thetas)) for c in entry.chi2]
-    for name, entry in ENTRIES.items()
-}
 
-# Lobe plots: one representative, readable configuration per model.
-LOBES: dict[str, dict] = {
-    "lambert": {"type": "lambert", "reflectance": 0.8},
-    "oren_nayar": {"type": "oren_nayar", "reflectance": 0.8, "sigma": 0.8},
-    "toon": {"type": "toon", "smoothness": 0.1},
-    "phong": {"type": "phong", "diffuse_reflectance": 0.3, "specular_reflectance": 0.6,
-              "exponent": 30},
-    "blinn": {"type": "blinn", "diffuse_reflectance": 0.3, "specular_reflectance": 0.6,
-              "exponent": 30},
-    "ward": {"type": "ward", "diffuse_reflectance": 0.3, "specular_reflectance": 0.6,
-             "alpha_u": 0.1, "alpha_v": 0.3},
-    "cook_torrance": {"type": "cook_torrance", "distribution": "ggx", "alpha": 0.3, "k": 0.3,
-                      "f0": 0.5, "diffuse_reflectance": 0.8},
-}
+def label(config: dict) -> str:
+    """A configuration's parameters as one line (a texture by its type)."""
+    def shown(v):
+        if isinstance(v, dict):
+            return v["value"] if v.get("type") == "rgb" else v.get("type", "texture")
+        return v
+    return ", ".join(f"{k} = {shown(v)}" for k, v in config.items() if k != "type") or "defaults"
+
+
+def report_chi2(quick: bool = False) -> dict[str, list[tuple[str, Chi2]]]:
+    """The χ² tests of the validation report, (label, test) per model: every
+    one of the catalog (the battery's set), or with ``quick`` the ones marked
+    representative of their model (phong and blinn at γ = 100 and 1000, sharp
+    and anisotropic Ward lobes, ...)."""
+    return {name: [(label(c.config), c) for c in entry.chi2 if c.quick or not quick]
+            for name, entry in ENTRIES.items()}
+
+
+def _negative() -> dict[str, tuple[dict, dict, float, float]]:
+    """Negative controls of the χ² test: the sampler of one configuration
+    against the pdf of a slightly different one, which the test must reject."""
+    return {name: (*entry.negative, entry.extra.get("negative_phi", 0.0))
+            for name, entry in ENTRIES.items() if entry.negative}
+
+
+def _lobes() -> dict[str, dict]:
+    """Lobe plots: one representative, readable configuration per model."""
+    return {name: entry(name).lobe or {"type": name} for name in BY_NAME}
+
+
+_DERIVED = {"FURNACE": _furnace, "NEGATIVE": _negative, "LOBES": _lobes}
+
+
+def __getattr__(name: str):
+    if name in _DERIVED:
+        value = globals()[name] = _DERIVED[name]()
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def quick(entries: dict, n: int = 1) -> dict:
@@ -473,24 +576,39 @@ def quick(entries: dict, n: int = 1) -> dict:
 # ----------------------------------------------------------------------------
 
 def bench_models() -> list[tuple[str, dict]]:
-    """Every model and variant whose render cost is compared (name, config)."""
-    return [
-        ("lambert", {"type": "lambert", "reflectance": 0.6}),
-        ("oren_nayar exact", {"type": "oren_nayar", "sigma": 0.5, "method": "exact"}),
-        ("oren_nayar table", {"type": "oren_nayar", "sigma": 0.5, "method": "table"}),
-        ("toon", {"type": "toon"}),
-        ("toon with ramps", {"type": "toon",
-                             "diffuse_ramp": toon_ramp([[0.1] * 3, [0.1] * 3, [0.4] * 3, [0.8] * 3]),
-                             "specular_ramp": toon_ramp([[0.0] * 3] * 7 + [[1.0] * 3])}),
-        ("phong", {"type": "phong", "exponent": 50}),
-        ("blinn", {"type": "blinn", "exponent": 50}),
-        *[(f"cook_torrance {d} {g}",
-           {"type": "cook_torrance", "distribution": d, "geometry": g, "alpha": 0.3})
-          for d in DISTRIBUTIONS for g in GEOMETRIES],
-        ("ward vectors", {"type": "ward", "alpha_u": 0.1, "alpha_v": 0.3, "formula": "vectors"}),
-        ("ward angles", {"type": "ward", "alpha_u": 0.1, "alpha_v": 0.3, "formula": "angles"}),
-    ]
+    """Every model and variant whose render cost is compared (label, config):
+    each registered plugin's ``Entry.bench`` (its defaults if it has none)."""
+    return [row for name in BY_NAME for row in entry(name).bench or [(name, {"type": name})]]
 
+
+# The scene of the in-process groups (bench/measure.py scene_dict): a sphere
+# on this floor, point lights and a dim constant environment.
+BENCH_FLOOR = {"type": "lambert", "reflectance": 0.5}
+
+# Plugin against Mitsuba's built-in, the same BSDF (up to float error, or
+# Mitsuba's G1 fit): (name, plugin, built-in). The groups builtin (renders),
+# kernels (BSDF calls) and tracing (tracing one call) compare each pair.
+BENCH_BUILTIN: list[tuple[str, dict, dict]] = [
+    ("cook_torrance ggx vs roughconductor ggx",
+     {"type": "cook_torrance", "distribution": "ggx", "geometry": "smith", "f0": 1.0, "k": 0.0,
+      "alpha": 0.3},
+     {"type": "roughconductor", "distribution": "ggx", "alpha": 0.3}),
+    ("cook_torrance beckmann vs roughconductor beckmann",
+     {"type": "cook_torrance", "distribution": "beckmann", "geometry": "smith", "f0": 1.0,
+      "k": 0.0, "alpha": 0.3},
+     {"type": "roughconductor", "distribution": "beckmann", "alpha": 0.3}),
+    ("lambert vs diffuse", {"type": "lambert", "reflectance": 0.6},
+     {"type": "diffuse", "reflectance": 0.6}),
+]
+# Two lobes against Mitsuba's two-lobe plastic (not the same BSDF: what a
+# second lobe costs to trace; the tracing group).
+BENCH_TWO_LOBES: tuple[str, dict, dict] = (
+    "cook_torrance ggx k=0.5 vs roughplastic ggx",
+    {"type": "cook_torrance", "distribution": "ggx", "geometry": "smith", "k": 0.5, "alpha": 0.3},
+    {"type": "roughplastic", "distribution": "ggx", "alpha": 0.3})
+
+# The Oren-Nayar table against the exact formulas (method and table_resolution added).
+BENCH_OREN_NAYAR = {"type": "oren_nayar", "sigma": 0.5, "reflectance": 0.8}
 
 # Sampling strategies per glossy lobe: (name, config, [(strategy, options), ...]);
 # the first strategy is the plugin's default.
@@ -509,3 +627,62 @@ BENCH_SAMPLING: list[tuple[str, dict, list[tuple[str, dict]]]] = [
       "specular_reflectance": 0.9},
      [("lobe", {}), ("cosine", {"sampling": "cosine"})]),
 ]
+
+# The glossy sphere the integrators and convergence groups render, and the
+# integrator of their converged reference.
+BENCH_GLOSSY = {"type": "cook_torrance", "distribution": "ggx", "alpha": 0.3, "k": 0.5}
+BENCH_REFERENCE_INTEGRATOR = {"type": "path", "max_depth": 16}
+BENCH_INTEGRATORS: list[tuple[str, dict]] = [
+    ("scanline", {"type": "scanline", "clamp": False, "shadows": True}),
+    ("direct", {"type": "direct"}),
+    ("path depth 2", {"type": "path", "max_depth": 2}),
+    ("path depth 3", {"type": "path", "max_depth": 3}),
+    ("path depth 8", {"type": "path", "max_depth": 8}),
+]
+
+# Scan-line cost against resolution and number of lights: (BSDF, integrator).
+BENCH_SCALING = ({"type": "lambert", "mode": "scanline"}, {"type": "scanline"})
+
+# A lobe switched off against the model without it: (name, lobe off, reference).
+BENCH_LOBES_OFF: list[tuple[str, dict, dict]] = [
+    ("cook_torrance k=1 vs lambert",
+     {"type": "cook_torrance", "k": 1.0, "diffuse_reflectance": 0.6},
+     {"type": "lambert", "reflectance": 0.6}),
+    ("phong m_S=0 vs lambert",
+     {"type": "phong", "specular_reflectance": 0.0, "diffuse_reflectance": 0.6},
+     {"type": "lambert", "reflectance": 0.6}),
+    ("ward m_D=0 vs ward m_D=0.5",
+     {"type": "ward", "diffuse_reflectance": 0.0, "alpha_u": 0.1, "alpha_v": 0.3},
+     {"type": "ward", "diffuse_reflectance": 0.5, "alpha_u": 0.1, "alpha_v": 0.3}),
+]
+
+# Energy compensation on against off: (name, configuration without
+# energy_compensation); every compensable plugin at least once.
+BENCH_ENERGY: list[tuple[str, dict]] = [
+    ("cook_torrance ggx smith", {"type": "cook_torrance", "distribution": "ggx",
+                                 "geometry": "smith", "alpha": 0.5, "k": 0.3}),
+    ("cook_torrance beckmann cook_torrance", {"type": "cook_torrance", "alpha": 0.5, "k": 0.3}),
+    ("cook_torrance blinn smith", {"type": "cook_torrance", "distribution": "blinn",
+                                   "geometry": "smith", "alpha": 0.5, "k": 0.3}),
+    ("phong", {"type": "phong", "exponent": 10.0}),
+    ("blinn", {"type": "blinn", "exponent": 10.0}),
+    ("ward", {"type": "ward", "alpha": 0.3}),
+    ("ward anisotropic", {"type": "ward", "alpha_u": 0.05, "alpha_v": 0.3}),
+    ("oren_nayar (EON)", {"type": "oren_nayar", "sigma": 0.8}),
+]
+
+# Many spheres, each with its own material (materials, frozen): kind -> the
+# material of the sphere at place t in [0, 1] of the grid; and the pairs
+# (plugin, built-in) compared.
+BENCH_MATERIALS: dict[str, Callable[[float], dict]] = {
+    "cook_torrance": lambda t: {"type": "cook_torrance", "distribution": "ggx",
+                                "geometry": "smith", "f0": 1.0, "k": 0.0,
+                                "alpha": 0.05 + 0.5 * t},
+    "roughconductor": lambda t: {"type": "roughconductor", "distribution": "ggx",
+                                 "alpha": 0.05 + 0.5 * t},
+    "lambert": lambda t: {"type": "lambert",
+                          "reflectance": {"type": "rgb", "value": [0.2 + 0.6 * t, 0.5, 0.8 - 0.6 * t]}},
+    "diffuse": lambda t: {"type": "diffuse",
+                          "reflectance": {"type": "rgb", "value": [0.2 + 0.6 * t, 0.5, 0.8 - 0.6 * t]}},
+}
+BENCH_MATERIAL_PAIRS = [("cook_torrance", "roughconductor"), ("lambert", "diffuse")]

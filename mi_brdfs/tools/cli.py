@@ -9,6 +9,9 @@ Mitsuba's own ``mitsuba`` command.
                     (see mi_brdfs/tools/compare.py; exit 0 pass, 3 a threshold failed)
     mi-brdfs validate -o REPORT_DIR [--quick]   (exit 1 when a check fails)
     mi-brdfs bench -o OUT_DIR [--quick] [--only GROUP]
+    mi-brdfs fit TARGET [TARGET ...] -o REPORT_DIR [--models NAME ...] [--quick]
+                 [--metric cosine|ngan] [-j N] [--scheduler ADDRESS]
+                    (see mi_brdfs/tools/fit; exit 1 when a fit fails)
     mi-brdfs --version
 
 ``render`` takes a scene file or the name of a bundled scene (``mi-brdfs
@@ -157,9 +160,11 @@ def resolve_scene(arg: str) -> tuple[str, bool]:
         raise CLIError(f"scene {arg} is a folder; give an XML file or a bundled scene's name")
     if os.path.exists(arg):
         return arg, False
-    bundled = scenes.path(arg)
-    if bundled is not None and os.sep not in arg:
-        return str(bundled), True
+    if os.sep not in arg:
+        try:
+            return scenes.path(arg), True
+        except ValueError:
+            pass
     raise CLIError(f"scene not found: {arg} (not a file; bundled scenes: "
                    f"{', '.join(scenes.names())})")
 
@@ -224,7 +229,7 @@ def cmd_render(args: argparse.Namespace) -> int:
     import drjit as dr
     import mitsuba as mi
 
-    from ..render.passes import render_passes
+    from ..render.passes import render_passes, split_passes
 
     # parallel=False: scene loading with Python plugins in worker threads failed
     # intermittently here (bad_alloc, basic_string::_M_create); serial loading is cheap.
@@ -232,8 +237,9 @@ def cmd_render(args: argparse.Namespace) -> int:
     spp = check_render_numbers(scene, args, defines)
 
     log = info_logger(args.prog, args.verbose)
+    chunks = split_passes(spp, args.passes)        # the passes that run (none empty)
     width, height = scene.sensors()[0].film().crop_size()
-    log(f"{scene_path}: {width}x{height}, {spp} spp in {min(args.passes, spp)} passes, "
+    log(f"{scene_path}: {width}x{height}, {spp} spp in {len(chunks)} passes, "
         f"seed {args.seed}, "
         f"variant {variant}, {dr.thread_count()} threads")
     progress = Progress(args.prog, enabled=not args.quiet)
@@ -247,8 +253,8 @@ def cmd_render(args: argparse.Namespace) -> int:
         names = output.channel_names(film_channel_names(scene), image.shape[2])
     except Exception:                       # a film without a bitmap: generic names
         names = output.channel_names([], image.shape[2])
-    info = {"scene": os.path.abspath(scene_path), "spp": spp, "seed": args.seed,
-            "passes": args.passes, "variant": variant,
+    info = {"scene": os.path.abspath(scene_path), "spp": sum(chunks), "seed": args.seed,
+            "passes": len(chunks), "pass_spp": ",".join(map(str, chunks)), "variant": variant,
             "defines": " ".join(f"{k}={v}" for k, v in defines.items()),
             **versions()}
     for path in targets:
@@ -275,7 +281,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
     thresholds = {k: getattr(args, k) for k in compare.THRESHOLDS}
     results = compare.compare(args.reference, args.tests, args.output, thresholds,
                               compare.parse_region(args.crop), args.tonemap,
-                              flip_mode=args.flip, mask_nonfinite=args.mask_nonfinite)
+                              flip_mode=args.flip, mask_nonfinite=args.mask_nonfinite,
+                              layer=args.layer)
     for c in results:
         m = c.metrics
         print(f"{c.test_path}: rmse {m['rmse']:.4g}, relmse {m['relmse']:.4g}, "
@@ -297,8 +304,8 @@ def cmd_validate(args: argparse.Namespace) -> int:
         if check["status"] == "fail":
             print(f"FAIL {check['id']}: {check['measured']}")
     print(f"report: {os.path.join(args.output, 'index.html')} ({results['seconds']:.0f} s); "
-          f"{s['pass']} checks pass, {s['known']} documented known limitations, "
-          f"{s['fail']} fail")
+          f"{s['pass']} checks pass, {s['documented']} documented behaviour, "
+          f"{s['known']} documented known limitations, {s['fail']} fail")
     return 1 if s["fail"] else 0
 
 
@@ -311,8 +318,29 @@ def cmd_bench(args: argparse.Namespace) -> int:
     only = [g.strip() for g in args.only.split(",")] if args.only else None
     results = bench.run(args.output, quick=args.quick, only=only, cache_dir=args.cache, log=log)
     print(f"bench: {len(results['groups'])} groups in {results['seconds']:.0f} s -> "
-          f"{os.path.join(args.output, 'README.md')}")
+          f"{os.path.join(args.output, 'README.md')}"
+          + (" (--quick: a smoke test; its numbers are not measurements)" if args.quick else ""))
     return 0
+
+
+def cmd_fit(args: argparse.Namespace) -> int:
+    from . import fit
+    from .fit import sweep
+
+    set_verbosity(args.verbose)
+    show = sweep.progress_printer(args.prog, enabled=not args.quiet, verbose=args.verbose > 0)
+    try:
+        records = fit.fit(args.targets, args.output, args.models, quick=args.quick,
+                          metric_name=args.metric, jobs=args.jobs, scheduler=args.scheduler,
+                          show=show, command=" ".join(["mi-brdfs", *sys.argv[1:]]))
+    finally:
+        show.close()
+    failed = [r for r in records if "error" in r]
+    for r in failed:
+        print(f"FAILED {r['target']} × {r['model']}: {r['error']}")
+    print(f"report: {fit.report_path(args.output)}; {len(records) - len(failed)} fits, "
+          f"{len(failed)} failed")
+    return 1 if failed else 0
 
 
 # ----------------------------------------------------------------------------
@@ -388,6 +416,9 @@ def parser() -> Parser:
     c.add_argument("--crop", default=None, metavar="X,Y,W,H", help="compare this region only")
     c.add_argument("--tonemap", default="clamp", choices=list(tonemap.OPERATORS),
                    help="display tone mapping of the pictures")
+    c.add_argument("--layer", default=None, metavar="NAME",
+                   help="compare this layer of the EXR inputs (an AOV such as albedo or nn; "
+                        "default: the render's R, G, B, or Y in mono variants)")
     c.set_defaults(run=cmd_compare)
 
     v = sub.add_parser("validate", parents=[common()], help="run the project's validation; HTML report")
@@ -397,11 +428,34 @@ def parser() -> Parser:
     v.set_defaults(run=cmd_validate)
 
     b = sub.add_parser("bench", parents=[common()], help="measure the speed/accuracy trade-offs")
-    b.add_argument("-o", "--output", required=True, help="results directory")
-    b.add_argument("--quick", action="store_true", help="tiny scene, few repeats (CI)")
+    b.add_argument("-o", "--output", required=True,
+                   help="report folder: new, empty, or a previous report")
+    b.add_argument("--quick", action="store_true",
+                   help="a smoke test that every group runs: tiny scene, few repeats, no "
+                        "findings (CI); its numbers are not measurements")
     b.add_argument("--only", default=None, help="comma-separated groups (default: all)")
     b.add_argument("--cache", default=None, help="reference cache (default ~/.cache/mi_brdfs)")
     b.set_defaults(run=cmd_bench)
+
+    f = sub.add_parser("fit", parents=[common(threads=False)],
+                       help="fit every course model to BSDFs: error, images, cost; HTML report")
+    f.add_argument("targets", nargs="+", metavar="TARGET",
+                   help="an XML file holding a <bsdf>, or PLUGIN:key=value,... "
+                        "(e.g. roughconductor:material=Au,alpha=0.3)")
+    f.add_argument("-o", "--output", required=True,
+                   help="report folder: new, empty, or a previous report")
+    f.add_argument("--models", nargs="+", default=None, metavar="NAME",
+                   help="models to fit: names (e.g. cook_torrance/ggx/smith, phong+ec) or plugin "
+                        "names (default: every model)")
+    f.add_argument("--quick", action="store_true", help="fewer directions, steps and pixels (CI)")
+    f.add_argument("--metric", default="cosine", choices=("cosine", "ngan"),
+                   help="the BRDF-space metric (default cosine; ngan: Ngan et al. 2005)")
+    f.add_argument("-j", "--jobs", type=integer(1, 1024), default=1,
+                   help="local worker processes (default 1: the steadiest cost ratios)")
+    f.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="run on this Dask distributed scheduler (e.g. tcp://host:8786) "
+                        "instead of local processes")
+    f.set_defaults(run=cmd_fit)
     for name, command in sub.choices.items():
         command.set_defaults(prog=command.prog)
     return p

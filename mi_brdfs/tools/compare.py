@@ -3,10 +3,16 @@
     mi-brdfs compare REFERENCE TEST [TEST ...] -o REPORT_DIR [--flip ldr|hdr]
                      [--max-rmse X] [--max-relmse X] [--max-mae X] [--max-flip X]
                      [--max-abs X] [--min-psnr DB] [--crop X,Y,W,H] [--tonemap NAME]
-                     [--mask-nonfinite]
+                     [--mask-nonfinite] [--layer NAME]
 
-Inputs are EXR (linear; the R, G, B channels) or PNG/JPEG (sRGB-decoded to
-linear values), all of the same size. Pixels that are NaN or Inf in an input
+Inputs are EXR (linear) or PNG/JPEG (sRGB-decoded to linear values), all of
+the same size. An EXR is read as ``mi-brdfs render`` writes it in any
+variant: its R, G, B channels (an alpha channel is left out), or its
+luminance Y (mono variants: compared in all three channels). ``--layer NAME``
+compares a layer of multi-layer EXRs instead (an AOV: ``NAME.R/G/B``,
+``NAME.X/Y/Z``, or a single channel such as a depth, repeated); an unknown
+layer is an error that lists the file's layers. PNG/JPEG inputs have no
+layers (``--layer`` applies to the EXR inputs). Pixels that are NaN or Inf in an input
 are refused, or left out of every metric with ``--mask-nonfinite`` (their
 count is reported).
 
@@ -82,17 +88,18 @@ class CompareError(ValueError):
 #  Loading and checking
 # ----------------------------------------------------------------------------
 
-def load(path: str) -> np.ndarray:
-    """An input as linear (H, W, 3) float64: an EXR's R, G, B channels, or a
-    PNG/JPEG decoded from sRGB (through mi.Bitmap). Non-finite values kept."""
+def load(path: str, layer: str | None = None) -> np.ndarray:
+    """An input as linear (H, W, 3) float64: an EXR's colour (of ``layer``,
+    see :func:`.exr.read_exr`), or a PNG/JPEG decoded from sRGB (through
+    mi.Bitmap). Non-finite values kept."""
     ext = check_type(path)
     if not os.path.exists(path):
         raise CompareError(f"no such file: {path}")
     if ext in HDR_TYPES:
         try:
-            return exr.read_exr(path).astype(np.float64)
+            return exr.read_exr(path, layer).astype(np.float64)
         except (ValueError, OSError) as error:
-            raise CompareError(f"{path}: not a readable EXR file") from error
+            raise CompareError(str(error)) from None
     if ext in LDR_TYPES:
         import mitsuba as mi
         try:
@@ -368,7 +375,7 @@ METRIC_ORDER = ["mse", "rmse", "relmse", "mae", "smape", "max_abs", "psnr", "fli
 
 
 def _html(ref_path: str, comparisons: list[Comparison], thresholds: dict, operator: str,
-          region, flip_mode: str, masked: bool) -> str:
+          region, flip_mode: str, masked: bool, layer: str | None = None) -> str:
     esc = html.escape
     css = {"PASS": "pass", "FAIL": "fail", "no thresholds": "none"}
     rows = []
@@ -402,6 +409,7 @@ def _html(ref_path: str, comparisons: list[Comparison], thresholds: dict, operat
             f"{per}</table><p>PSNR peak {c.metrics['psnr_peak']:.6g} (overall and every "
             f"channel).{left_out}</p><div class='figs'>{figures}</div></section>")
     crop_text = f"crop {','.join(map(str, region))}" if region else "whole image"
+    layer_text = f"layer {esc(layer)} of the EXR inputs; " if layer else ""
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>mi-brdfs compare</title>
 <style>
@@ -415,7 +423,7 @@ tr.none td:last-child, p.none {{ color: #555; }}
 figure {{ margin: 0; }} figure img {{ width: 360px; }}
 </style></head><body>
 <h1>Comparison against {esc(ref_path)}</h1>
-<p>FLIP mode: {flip_mode.upper()}-FLIP; tone mapping for display: {esc(operator)}; region:
+<p>{layer_text}FLIP mode: {flip_mode.upper()}-FLIP; tone mapping for display: {esc(operator)}; region:
 {crop_text}; thresholds: {esc(limits)}. All images and error maps as layers of one EXR:
 <a href="maps.exr">maps.exr</a>.</p>
 <table><tr><th>test image</th>{header}<th>verdict</th></tr>{''.join(rows)}</table>
@@ -441,9 +449,9 @@ def _write_text(path: str, write) -> None:
 def compare(reference: str, tests: list[str], out_dir: str, thresholds: dict | None = None,
             region: tuple[int, int, int, int] | None = None,
             operator: str = "clamp", flip_mode: str | None = None,
-            mask_nonfinite: bool = False) -> list[Comparison]:
+            mask_nonfinite: bool = False, layer: str | None = None) -> list[Comparison]:
     """Compare every test image with the reference and write the report to
-    out_dir. Raises CompareError (bad input) or outputs.OutputError (a report
+    out_dir; ``layer`` picks a layer of the EXR inputs. Raises CompareError (bad input) or outputs.OutputError (a report
     folder that cannot be used) before comparing or writing anything."""
     thresholds = {k: v for k, v in (thresholds or {}).items() if v is not None}
     for key in thresholds:
@@ -461,10 +469,10 @@ def compare(reference: str, tests: list[str], out_dir: str, thresholds: dict | N
     flip_mode = flip_mode or default_flip_mode(inputs)
     ldr = default_flip_mode(inputs) == "ldr"            # every input is PNG/JPEG
 
-    full_ref = load(reference)
+    full_ref = load(reference, layer)
     images = []
     for path in tests:
-        image = load(path)
+        image = load(path, layer)
         check_pair(full_ref, image, reference, path)
         images.append((path, image))
     if not mask_nonfinite:
@@ -492,7 +500,8 @@ def compare(reference: str, tests: list[str], out_dir: str, thresholds: dict | N
             layers[f"test{i}.flip"] = flip_map
         write_layers(os.path.join(tmp, "maps.exr"), layers)
         _write_text(os.path.join(tmp, "metrics.json"), lambda f: json.dump(
-            {"reference": reference, "region": region, "thresholds": thresholds,
+            {"reference": reference, "layer": layer or "", "region": region,
+             "thresholds": thresholds,
              "flip_mode": flip_mode, "psnr_peak": "1 (LDR inputs)" if ldr else "max(reference)",
              "mask_nonfinite": mask_nonfinite,
              "tests": [{"path": c.test_path, "verdict": c.verdict,
@@ -503,7 +512,7 @@ def compare(reference: str, tests: list[str], out_dir: str, thresholds: dict | N
                     lambda f: csv.writer(f).writerows(_csv_rows(comparisons)))
         _write_text(os.path.join(tmp, "index.html"),
                     lambda f: f.write(_html(reference, comparisons, thresholds, operator, region,
-                                            flip_mode, mask_nonfinite)))
+                                            flip_mode, mask_nonfinite, layer)))
     return comparisons
 
 

@@ -11,13 +11,15 @@ Report folders (``compare -o DIR``, ``validate -o DIR``) are one of:
 - a path that does not exist yet (its parent folder must);
 - an empty folder;
 - a previous report of ours: a folder holding the marker file ``.mi-brdfs-report``,
-  which lists every file that report wrote, and nothing else.
+  which lists every file that report wrote (paths relative to the folder: a
+  report may have subfolders, e.g. the bench's fit sweep), and nothing else.
 
 Anything else (an existing file, a folder holding other files, a folder that
 holds one of the command's inputs) is refused with one line, before any work,
 and nothing is touched. The report is written into a temporary folder beside
 the target and moved into place when complete; a previous report is replaced
-by deleting only the files its marker lists. File and folder modes follow the
+by deleting only the files its marker lists (and the subfolders that held
+them, once empty). File and folder modes follow the
 umask (0644 and 0755 under umask 022), as for any file the user creates.
 """
 from __future__ import annotations
@@ -58,7 +60,22 @@ def check_output_file(path: str, option: str = "-o") -> None:
 
 
 def _listing(path: str) -> list[str]:
-    return sorted(os.listdir(path))
+    """Every file under ``path``, as relative paths ("/"-separated), and every
+    folder that holds no file (as "name/"), sorted."""
+    found = []
+    for folder, dirs, files in os.walk(path):
+        rel = os.path.relpath(folder, path)
+        prefix = "" if rel == "." else rel.replace(os.sep, "/") + "/"
+        found += [prefix + name for name in files]
+        if not files and not dirs and prefix:
+            found.append(prefix)
+    return sorted(found)
+
+
+def _safe(name) -> bool:
+    """A marker entry: a relative path inside the report, no "..", no absolute path."""
+    parts = name.split("/") if isinstance(name, str) else [""]
+    return all(part not in ("", ".", "..") for part in parts)
 
 
 def previous_report(path: str) -> list[str] | None:
@@ -69,7 +86,7 @@ def previous_report(path: str) -> list[str] | None:
             files = json.load(f)["files"]
     except (OSError, ValueError, KeyError, TypeError):
         return None
-    if not isinstance(files, list) or not all(isinstance(n, str) and "/" not in n for n in files):
+    if not isinstance(files, list) or not all(_safe(n) for n in files):
         return None
     return files
 
@@ -98,7 +115,7 @@ def check_report_dir(path: str, inputs: Iterable[str] = (), option: str = "-o") 
                 raise OutputError(f"{shown} is a folder holding other files "
                                   f"({_few(present)}), not an mi-brdfs report; "
                                   "give a new or empty folder (nothing was written)")
-            foreign = [n for n in present if n != MARKER and n not in listed]
+            foreign = [n for n in present if n != MARKER and n not in set(listed)]
             if foreign:
                 raise OutputError(f"{shown} holds a previous report and other files "
                                   f"({_few(foreign)}); give a new or empty folder "
@@ -122,12 +139,13 @@ def report_dir(path: str, command: str, inputs: Iterable[str] = ()) -> Iterator[
     tmp = tempfile.mkdtemp(prefix=".tmp-report-", dir=parent)
     try:
         yield tmp
-        files = _listing(tmp)
+        files = [n for n in _listing(tmp) if not n.endswith("/")]
         with open(os.path.join(tmp, MARKER), "w") as f:
             json.dump({"command": command, "files": files}, f, indent=1)
         for name in files + [MARKER]:
             os.chmod(os.path.join(tmp, name), file_mode())
-        os.chmod(tmp, dir_mode())                # mkdtemp made it 0700
+        for folder, _, _ in os.walk(tmp):
+            os.chmod(folder, dir_mode())         # mkdtemp made it 0700
         check_report_dir(path, inputs)           # unchanged while we worked
         _move_into_place(tmp, path)
     finally:
@@ -156,5 +174,11 @@ def _move_into_place(tmp: str, path: str) -> None:
     for name in listed + [MARKER]:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(os.path.join(old, name))
+    # the subfolders that held them, deepest first, if nothing else is in them
+    folders = {os.path.dirname(n) for n in listed if "/" in n}
+    for folder in sorted({"/".join(f.split("/")[:k]) for f in folders
+                          for k in range(1, f.count("/") + 2)}, key=len, reverse=True):
+        with contextlib.suppress(OSError):
+            os.rmdir(os.path.join(old, folder))
     with contextlib.suppress(OSError):
         os.rmdir(old)

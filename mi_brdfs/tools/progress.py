@@ -1,5 +1,6 @@
-"""Progress of a render in passes: a tqdm bar on a terminal, plain lines in a
-pipe or a log file (never a carriage return there), nothing with ``--quiet``.
+"""Progress of a render in passes (or of tasks: ``unit``): a tqdm bar on a
+terminal, plain lines in a pipe or a log file (never a carriage return
+there), nothing with ``--quiet``.
 
 The ETA comes from the passes after the first one: the first pass also
 compiles the kernels (seconds, for a pass that then takes milliseconds), so
@@ -33,8 +34,9 @@ def _seconds(s: float | None) -> str:
 class Progress:
     """``show(done_spp, total_spp, elapsed_s)`` callback for ``render_passes``."""
 
-    def __init__(self, label: str, stream: TextIO | None = None, enabled: bool = True):
-        self.label, self.enabled = label, enabled
+    def __init__(self, label: str, stream: TextIO | None = None, enabled: bool = True,
+                 unit: str = "spp"):
+        self.label, self.enabled, self.unit = label, enabled, unit
         self.stream = stream if stream is not None else sys.stderr
         self.history: list[tuple[int, float]] = []
         self.bar = None
@@ -48,7 +50,7 @@ class Progress:
         if self.terminal:
             self._bar(done, total, left)
         else:
-            self.stream.write(f"{self.label}: {done}/{total} spp, {_seconds(elapsed)}, "
+            self.stream.write(f"{self.label}: {done}/{total} {self.unit}, {_seconds(elapsed)}, "
                               f"ETA {_seconds(left)}\n")
             self.stream.flush()
 
@@ -56,10 +58,10 @@ class Progress:
         from tqdm import tqdm
 
         if self.bar is None:
-            self.bar = tqdm(total=total, desc=self.label, unit="spp", file=self.stream,
+            self.bar = tqdm(total=total, desc=self.label, unit=self.unit, file=self.stream,
                             dynamic_ncols=True, leave=True,
-                            bar_format="{desc}: {percentage:3.0f}%|{bar}| {n}/{total} spp "
-                                       "[{elapsed}, {postfix}]")
+                            bar_format="{desc}: {percentage:3.0f}%|{bar}| {n}/{total} "
+                                       + self.unit + " [{elapsed}, {postfix}]")
         self.bar.set_postfix_str(f"ETA {_seconds(left)}", refresh=False)
         self.bar.update(done - self.bar.n)
         if done >= total:

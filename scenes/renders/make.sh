@@ -1,12 +1,13 @@
 #!/bin/sh
-# Regenerate the README's renders: every scene in both modes (hdr with the
+# Regenerate the README's renders: every scene (every .xml here) in both modes (hdr with the
 # default clamp tone mapping), the course scene's hdr at 256 spp with aces, and
 # toon's hdr at +2.65 EV (log2 2π: its hdr mode reflects the scan-line colours
 # divided by 2π, so that it reflects at most its brightest colours).
 #   sh scenes/renders/make.sh
 set -e
 cd "$(dirname "$0")"
-for scene in lambert oren_nayar toon phong blinn ward cook_torrance course; do
+for xml in ../*.xml; do
+    scene=$(basename "$xml" .xml)
     for mode in scanline hdr; do
         [ "$scene/$mode" = "course/hdr" ] && continue
         exposure=0

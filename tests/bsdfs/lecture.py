@@ -77,7 +77,7 @@ def _g_blinn_curve(rho, n_mu=401, n_theta=400, n_phi=256):
 
 
 def g_blinn(na, rho):
-    """Smith G1 of the Blinn distribution itself (issue 13), interpolated
+    """Smith G1 of the Blinn distribution itself, interpolated
     (cubic) from the brute-force quadrature above."""
     from scipy.interpolate import CubicSpline
     mu, g = _g_blinn_curve(float(rho))

@@ -22,6 +22,12 @@ parameter declarations (``PARAMS``, ``OPTIONS``):
 
 A model's own module keeps only its independent transcription of the lecture
 and what is particular to it.
+
+The cases are built from the declarations and the catalog alone: no BSDF is
+loaded while pytest collects them, and each model's entry is built on its
+own, so a broken model or catalog entry fails its own tests only (a plugin
+whose entry cannot be built gets one failing case per test, ``NAME-entry``;
+tests/bsdfs/test_registry.py checks that).
 """
 from __future__ import annotations
 
@@ -35,13 +41,28 @@ import mitsuba as mi
 
 from mi_brdfs.bsdfs import BY_NAME
 from mi_brdfs.bsdfs.base import ParameterError
+from mi_brdfs.tools import catalog
 from mi_brdfs.tools.catalog import ENTRIES
-from support import (CHI2_ALPHA, albedo, assert_refused, chi2_test, chi2_test_count, config_id, evaluate,
-                     direct_call_failures, error_line, finite, finite_difference, floats, points,
-                     f32, mirror_pairs, property_form_failures, random_hemisphere, surface, vec)
+from support import (CHI2_ALPHA, BrokenEntry, albedo, assert_refused, chi2_test, chi2_test_count,
+                     config_id, direct_call_failures, evaluate, error_line, finite,
+                     finite_difference, floats, points, f32, mirror_pairs,
+                     property_form_failures, random_hemisphere, surface, vec)
 
 PLUGINS = BY_NAME
 MODES = ("hdr", "scanline")
+
+
+def from_entries(make, nargs: int = 1) -> list:
+    """pytest params: ``make(name, entry)`` for every plugin's catalog entry. A
+    plugin whose entry cannot be built gets one case, failing with its error
+    (conftest.pytest_pyfunc_call), instead of a collection error for all."""
+    params = []
+    for name in PLUGINS:
+        try:
+            params += make(name, catalog.entry(name))
+        except Exception as error:
+            params.append(pytest.param(*[BrokenEntry(name, error)] * nargs, id=f"{name}-entry"))
+    return params
 
 
 def modes_of(config: dict) -> tuple[str, ...]:
@@ -114,9 +135,10 @@ def test_load_eval_pdf_sample(config, rng):
 #  2. χ²: one Šidák correction over every χ² run of the suite
 # ----------------------------------------------------------------------------
 
-CHI2_CASES = [pytest.param(c, theta, id=f"{config_id(c.config)}-theta={theta}")
-              for name in PLUGINS for c in ENTRIES[name].chi2 for theta in c.thetas]
-NEGATIVE = [pytest.param(name, id=name) for name in PLUGINS if ENTRIES[name].negative]
+CHI2_CASES = from_entries(lambda name, e: [
+    pytest.param(c, theta, id=f"{config_id(c.config)}-theta={theta}")
+    for c in e.chi2 for theta in c.thetas], nargs=2)
+NEGATIVE = from_entries(lambda name, e: [pytest.param(name, id=name)] if e.negative else [])
 CHI2_TEST_COUNT = chi2_test_count()      # every χ² run of the suite, the variants' included
 ALPHA = CHI2_ALPHA
 
@@ -156,7 +178,7 @@ def random_viewers(rng, n):
     return f32(wi)
 
 
-@pytest.mark.parametrize("config", each_mode([c for e in ENTRIES.values() for c in e.consistency]))
+@pytest.mark.parametrize("config", from_entries(lambda name, e: each_mode(e.consistency)))
 def test_sample_weight_matches_eval_over_pdf(config, rng):
     n = 100_000
     wi = random_viewers(rng, n)
@@ -186,8 +208,9 @@ def test_sample_weight_matches_eval_over_pdf(config, rng):
 #  4. Reciprocity
 # ----------------------------------------------------------------------------
 
-RECIPROCAL = [pytest.param(c, id=config_id(c)) for n, cls in PLUGINS.items() if cls.reciprocal
-              for c in ENTRIES[n].interior + ENTRIES[n].reciprocity]
+RECIPROCAL = from_entries(lambda name, e: [pytest.param(c, id=config_id(c))
+                                            for c in e.interior + e.reciprocity
+                                            if PLUGINS[name].reciprocal])
 
 
 @pytest.mark.parametrize("config", RECIPROCAL)
@@ -206,7 +229,8 @@ def test_reciprocity(config, rng):
 #  5. White furnace
 # ----------------------------------------------------------------------------
 
-FURNACE = [pytest.param(f, id=f"{n}-{f.label}") for n in PLUGINS for f in ENTRIES[n].furnace]
+FURNACE = from_entries(lambda name, e: [pytest.param(f, id=f"{name}-{f.label}")
+                                         for f in e.furnace])
 
 
 @pytest.mark.parametrize("case", FURNACE)
@@ -271,7 +295,7 @@ def differentiable_keys(params) -> list[str]:
             and dr.is_array_v(params[k]) and dr.is_float_v(params[k])]
 
 
-@pytest.mark.parametrize("config", each_mode([c for e in ENTRIES.values() for c in e.extremes]))
+@pytest.mark.parametrize("config", from_entries(lambda name, e: each_mode(e.extremes)))
 def test_extremes(config):
     bsdf = mi.load_dict(config)
     params = mi.traverse(bsdf)
@@ -307,35 +331,31 @@ def test_extremes(config):
 #  7. Gradients against finite differences
 # ----------------------------------------------------------------------------
 
-def present(config: dict) -> dict:
-    """{name: Param} of the parameters a configuration reads."""
-    return dict(mi.load_dict(config).params)
-
-
 def traverse_key(p) -> str:
     return p.name if p.kind == "float" else p.name + ".value"
 
 
-def gradient_cases():
+def gradient_cases(name: str, entry) -> list:
+    """Every parameter an interior configuration gives as a number (a given
+    parameter is always read), at that number and, for colours and weights,
+    at its bounds."""
     cases = []
-    for name in PLUGINS:
-        for config in ENTRIES[name].interior:
-            for mode in modes_of(config):
-                base = in_mode(config if mode == "hdr" else wants_scanline(config), mode)
-                for p in present(base).values():
-                    if not isinstance(base.get(p.name), float):
-                        continue                    # textures: not a single number
-                    points = [("interior", base[p.name])]
-                    if p.role in ("colour", "weight"):
-                        points += [("at 0" if p.lo == 0 else "at lo", p.lo),
-                                   ("at hi", p.probe_hi())]
-                    for where, x in points:
-                        cases.append(pytest.param(base, p, where, x,
-                                                  id=f"{config_id(base)}-{p.name}-{where}"))
+    for config in entry.interior:
+        for mode in modes_of(config):
+            base = in_mode(config if mode == "hdr" else wants_scanline(config), mode)
+            for p in PLUGINS[name].PARAMS:
+                if not isinstance(base.get(p.name), float):
+                    continue                    # not given, or a texture: not a single number
+                points = [("interior", base[p.name])]
+                if p.role in ("colour", "weight"):
+                    points += [("at 0" if p.lo == 0 else "at lo", p.lo), ("at hi", p.probe_hi())]
+                for where, x in points:
+                    cases.append(pytest.param(base, p, where, x,
+                                              id=f"{config_id(base)}-{p.name}-{where}"))
     return cases
 
 
-@pytest.mark.parametrize("config, p, where, x", gradient_cases())
+@pytest.mark.parametrize("config, p, where, x", from_entries(gradient_cases, nargs=4))
 def test_gradient_matches_finite_differences(config, p, where, x, rng):
     """AD of Σ eval with respect to one parameter (enabled and updated through
     traverse, as an optimiser does) = a finite difference of fresh loads:
@@ -363,23 +383,12 @@ def test_gradient_matches_finite_differences(config, p, where, x, rng):
 #  8. Bad values and options: one line, at load time and at update()
 # ----------------------------------------------------------------------------
 
-def base_config(name: str, param: str) -> dict | None:
-    """A configuration of plugin ``name`` that reads ``param`` as a plain value."""
-    for config in [{"type": name}] + ENTRIES[name].interior:
-        config = {k: v for k, v in config.items() if k != "energy_compensation"}
-        if param in present(config):
-            return config
-    return None
-
-
 def plain_params():
-    """(plugin name, Param, a configuration reading it as a plain value) for
-    every declared parameter that some configuration reads so."""
+    """(plugin name, Param, a configuration reading it as a plain value: the
+    parameter given at its default) for every declared parameter."""
     for name, cls in PLUGINS.items():
         for p in cls.PARAMS:
-            config = base_config(name, p.name)
-            if config is not None:
-                yield name, p, config
+            yield name, p, {"type": name, p.name: p.default}
 
 
 def bad_values(p) -> list[tuple[str, object, float]]:
@@ -413,7 +422,7 @@ def test_bad_value_is_refused_at_load(config, p, value, shown):
 @pytest.mark.parametrize("config, p, value, shown",
                          [c for c in bad_value_cases() if not isinstance(c.values[2], dict)])
 def test_bad_value_is_refused_at_update(config, p, value, shown):
-    """The same message at params.update() (issue 11): negative colours or an
+    """The same message at params.update(): negative colours or an
     exponent of -1 would render negative pixels or a silently dropped lobe."""
     bsdf = mi.load_dict(config)
     params = mi.traverse(bsdf)
@@ -473,8 +482,8 @@ def test_unknown_parameter_is_refused(name):
 #  9. traverse, update, and which lobes are traced
 # ----------------------------------------------------------------------------
 
-@pytest.mark.parametrize("config", [pytest.param(c, id=config_id(c)) for n in PLUGINS
-                                    for c in [{"type": n}] + ENTRIES[n].interior])
+@pytest.mark.parametrize("config", from_entries(lambda name, e: [
+    pytest.param(c, id=config_id(c)) for c in [{"type": name}] + e.interior]))
 def test_traverse_exposes_every_parameter_read(config):
     bsdf = mi.load_dict(config)
     params = mi.traverse(bsdf)
@@ -486,8 +495,8 @@ def test_traverse_exposes_every_parameter_read(config):
         assert not (params.flags(key) & mi.ParamFlags.NonDifferentiable), key
 
 
-@pytest.mark.parametrize("config", [pytest.param(c, id=config_id(c)) for n in PLUGINS
-                                    for c in ENTRIES[n].interior])
+@pytest.mark.parametrize("config", from_entries(lambda name, e: [
+    pytest.param(c, id=config_id(c)) for c in e.interior]))
 def test_update_matches_a_fresh_load(config, rng):
     """Every parameter changed through traverse + update() gives the BSDF a
     fresh load with those values gives."""
@@ -508,49 +517,49 @@ def test_update_matches_a_fresh_load(config, rng):
         np.testing.assert_allclose(a, b, rtol=1e-5, atol=1e-7)
 
 
-def switch_cases():
-    """(plugin, parameter, value) that switch a lobe off at load time."""
-    cases = []
-    for name, cls in PLUGINS.items():
-        default = mi.load_dict({"type": name}).flags()
-        for p in cls.PARAMS:
-            if p.role not in ("colour", "weight") or p.name not in present({"type": name}):
-                continue
-            for value in {0.0, p.probe_hi()} if p.role == "weight" else {0.0}:
-                if mi.load_dict({"type": name, p.name: value}).flags() != default:
-                    cases.append(pytest.param(name, p, value, id=f"{name}-{p.name}={value}"))
-    return cases
-
-
-@pytest.mark.parametrize("name, p, value", switch_cases())
-def test_a_lobe_is_dropped_only_when_it_cannot_matter(name, p, value):
-    """Model only what a scene requires — but a parameter that is grad-enabled
-    or changed through update() keeps its lobe traced (issue 11)."""
+def switches(name: str) -> list[tuple]:
+    """(Param, value) of plugin ``name`` that switch a lobe off at load time:
+    a colour at 0, a weight at either end (loaded: at run time)."""
     default = mi.load_dict({"type": name}).flags()
-    assert mi.load_dict({"type": name, p.name: value}).flags() != default   # dropped
-    key = traverse_key(p)
-    # grad-enabled: the lobe comes back, so an optimiser can leave the bound
-    bsdf = mi.load_dict({"type": name, p.name: value})
-    params = mi.traverse(bsdf)
-    dr.enable_grad(params[key])
-    params.update()
-    assert bsdf.flags() == default
-    # changed through update() to the switching value: the lobe stays
-    bsdf = mi.load_dict({"type": name})
-    params = mi.traverse(bsdf)
-    params[key] = value
-    params.update()
-    assert bsdf.flags() == default
-    # a texture (not a constant) keeps its lobe
-    if p.kind != "float":
-        tex = {"type": "checkerboard", "color0": value, "color1": value}
-        assert mi.load_dict({"type": name, p.name: tex}).flags() == default
+    read = mi.load_dict({"type": name}).params
+    found = []
+    for p in PLUGINS[name].PARAMS:
+        if p.role not in ("colour", "weight") or p.name not in read:
+            continue
+        for value in sorted({0.0, p.probe_hi()} if p.role == "weight" else {0.0}):
+            if mi.load_dict({"type": name, p.name: value}).flags() != default:
+                found.append((p, value))
+    return found
 
 
-def test_switches_exist():
-    """The lobe-switch test above has cases for every model with two lobes."""
-    names = {c.values[0] for c in switch_cases()}
-    assert {"lambert", "phong", "blinn", "ward", "cook_torrance", "toon", "oren_nayar"} <= names
+@pytest.mark.parametrize("name", PLUGINS)
+def test_a_lobe_is_dropped_only_when_it_cannot_matter(name):
+    """Model only what a scene requires — but a parameter that is grad-enabled
+    or changed through update() keeps its lobe traced. Every model has a
+    parameter that switches a lobe off."""
+    default = mi.load_dict({"type": name}).flags()
+    found = switches(name)
+    assert found, f"{name}: no colour or weight switches a lobe off"
+    for p, value in found:
+        where = f"{name}.{p.name} = {value}"
+        key = traverse_key(p)
+        # grad-enabled: the lobe comes back, so an optimiser can leave the bound
+        bsdf = mi.load_dict({"type": name, p.name: value})
+        params = mi.traverse(bsdf)
+        dr.enable_grad(params[key])
+        params.update()
+        assert bsdf.flags() == default, f"{where}, grad-enabled: lobe still dropped"
+        # changed through update() to the switching value: the lobe stays
+        bsdf = mi.load_dict({"type": name})
+        params = mi.traverse(bsdf)
+        params[key] = value
+        params.update()
+        assert bsdf.flags() == default, f"{where} through update(): lobe dropped"
+        # a texture (not a constant) keeps its lobe
+        if p.kind != "float":
+            tex = {"type": "checkerboard", "color0": value, "color1": value}
+            assert mi.load_dict({"type": name, p.name: tex}).flags() == default, \
+                f"{where} as a texture: lobe dropped"
 
 
 # ----------------------------------------------------------------------------

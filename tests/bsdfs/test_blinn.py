@@ -1,9 +1,9 @@
-"""blinn: the lecture's formula and the issue's hdr lobe with its exact
+"""blinn: the lecture's formula and its hdr lobe with the exact
 normal-incidence normalisation, transcribed independently in NumPy (float64),
 and blinn's own closed forms. What blinn shares with phong is in
 test_power_lobes.py, what every model shares in the battery (test_battery.py).
 
-The transcription is written from the lecture and the issue, not from
+The transcription is written from the lecture and the hdr formulas, not from
 mi_brdfs/bsdfs/blinn.py: d the light (``wo``), w the viewer (``si.wi``), n = +z,
 h = normalize(d + w).
 """
@@ -37,7 +37,7 @@ def cos_h(d, w):
 
 
 def above(d, w):
-    """The issue: a light or a viewer below (or on) the surface gets no reflection."""
+    """A light or a viewer below (or on) the surface gets no reflection."""
     return ((d[:, 2] > 0) & (w[:, 2] > 0))[:, None]
 
 
@@ -49,11 +49,11 @@ def lecture_scanline(d, w, m_d, m_s, gamma):
 
 
 def giesen(gamma):
-    """The issue's exact normal-incidence normalisation."""
+    """The exact normal-incidence normalisation (Giesen)."""
     return (gamma + 2) * (gamma + 4) / (8 * np.pi * (2 ** (-gamma / 2) + gamma))
 
 
-def issue_hdr(d, w, m_d, m_s, gamma):
+def normalised_hdr(d, w, m_d, m_s, gamma):
     """(m_D/pi + m_S N(gamma) cos^gamma(theta_h)) · cos(theta_o)."""
     lobe = giesen(gamma) * clamp(cos_h(d, w)) ** gamma
     f = m_d[None, :] / np.pi + m_s[None, :] * lobe[:, None]

@@ -277,7 +277,7 @@ def test_v_cavity_normal_incidence_closed_form(dist):
 
 
 # ----------------------------------------------------------------------------
-#  Grazing mirror pairs (issue 11): exact down to cos θ = 1e-19, 0 below
+#  Grazing mirror pairs: exact down to cos θ = 1e-19, 0 below
 # ----------------------------------------------------------------------------
 
 GRAZING = [1e-10, 1e-12, 1e-19]

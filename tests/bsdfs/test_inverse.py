@@ -1,4 +1,4 @@
-"""Inverse rendering as Mitsuba users do it (issue 11): spatially varying
+"""Inverse rendering as Mitsuba users do it: spatially varying
 parameters recovered from renders of a known scene by gradient descent (Adam),
 through mi.traverse and params.update(), including a start at the bound 0.
 

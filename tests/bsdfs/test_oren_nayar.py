@@ -55,7 +55,7 @@ def scanline_reference(d, w, m_d, sigma):
 
 
 def hdr_reference(d, w, m_d, sigma):
-    """The issue's hdr eval: m_D/π (A + B G sin α tan β) cos θ_o."""
+    """The hdr eval: m_D/π (A + B G sin α tan β) cos θ_o."""
     return lecture_oren_nayar(d, w, m_d, sigma) / np.pi
 
 
@@ -75,7 +75,7 @@ def test_scanline_matches_lecture(rng, sigma):
 
 
 @pytest.mark.parametrize("sigma", SIGMAS)
-def test_hdr_matches_issue_formula(rng, sigma):
+def test_hdr_matches_normalised_formula(rng, sigma):
     n = 4096
     d, w = f32(random_hemisphere(rng, n, 0.01)), f32(random_hemisphere(rng, n, 0.01))
     m_d = np.array([2.6, 1.1, 0.3])          # hdr: no clamp

@@ -1,9 +1,9 @@
-"""phong: the lecture's formula and the issue's normalised hdr lobe, transcribed
+"""phong: the lecture's formula and its normalised hdr lobe, transcribed
 independently in NumPy (float64), and phong's own closed forms. What phong
 shares with blinn is in test_power_lobes.py, what every model shares in the
 battery (test_battery.py).
 
-The transcription is written from the lecture and the issue, not from
+The transcription is written from the lecture and the hdr formulas, not from
 mi_brdfs/bsdfs/phong.py: d the light (``wo``), w the viewer (``si.wi``), n = +z,
 r = 2 (d·n) n - d.
 """
@@ -37,7 +37,7 @@ def cos_alpha(d, w):
 
 
 def above(d, w):
-    """The issue: a light or a viewer below (or on) the surface gets no reflection."""
+    """A light or a viewer below (or on) the surface gets no reflection."""
     return ((d[:, 2] > 0) & (w[:, 2] > 0))[:, None]
 
 
@@ -48,7 +48,7 @@ def lecture_scanline(d, w, m_d, m_s, gamma):
     return (f_d + f_s) * above(d, w)
 
 
-def issue_hdr(d, w, m_d, m_s, gamma):
+def normalised_hdr(d, w, m_d, m_s, gamma):
     """(m_D/pi + m_S (gamma+2)/(2 pi) cos^gamma(alpha)) · cos(theta_o), gamma > 0."""
     lobe = (gamma + 2) / (2 * np.pi) * clamp(cos_alpha(d, w)) ** gamma
     f = m_d[None, :] / np.pi + m_s[None, :] * lobe[:, None]

@@ -66,14 +66,14 @@ def test_scanline_matches_lecture(model, rng, gamma):
 
 @MODELS
 @pytest.mark.parametrize("gamma", [1.0, 7.5, 120.0, 1e4])
-def test_hdr_matches_issue_formula(model, rng, gamma):
-    """The plugin against the model's NumPy transcription of the issue's hdr lobe."""
+def test_hdr_matches_normalised_formula(model, rng, gamma):
+    """The plugin against the model's NumPy transcription of its normalised hdr lobe."""
     module = MODULES[model]
     d, w = lecture_pairs(module, rng, gamma)
     bsdf = load(model, diffuse_reflectance=rgb(M_D), specular_reflectance=rgb(M_S),
                 exponent=gamma)
     value, _ = evaluate(bsdf, wi=w, wo=d)
-    expected = module.issue_hdr(d, w, M_D, M_S, gamma)
+    expected = module.normalised_hdr(d, w, M_D, M_S, gamma)
     np.testing.assert_allclose(value, expected, rtol=2e-5, atol=1e-6 * expected.max())
     assert gamma < 5 or (value > 1).any()       # unclamped
 
@@ -132,7 +132,7 @@ def test_furnace_closed_forms(model):
 
 @MODELS
 def test_furnace_uniform_hemisphere_estimate_agrees(model):
-    """The issue's estimator too (jittered strata uniform over the hemisphere),
+    """The albedo by jittered strata uniform over the hemisphere agrees too,
     for the broad lobes it can resolve. Measured error against the lobe
     quadrature (3 seeds): at most 4.7e-5 (phong, gamma = 0, 88°)."""
     wo = uniform_hemisphere_grid(512, 2048, seed=271828)

@@ -80,7 +80,7 @@ def lecture_toon(d, w, p):
 
 def reference(d, w, p, mode):
     """scanline: clamp01(f_d) + clamp01(f_s), lights behind included (the dark
-    side); hdr: (f_d + f_s)/(2π) for lights above the surface (the issue's
+    side); hdr: (f_d + f_s)/(2π) for lights above the surface (the hdr
     normalisation: a constant colour c reflects c over the hemisphere; the
     surface is opaque); 0 for a viewer below."""
     f_d, f_s = lecture_toon(d, w, p)

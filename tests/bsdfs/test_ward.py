@@ -56,7 +56,7 @@ def ward_scanline(d, w, m_d, m_s, alpha_t, alpha_b):
 
 
 def ward_hdr(d, w, m_d, m_s, alpha_t, alpha_b):
-    """The issue's hdr eval: m_D / pi cos(theta_o) + the same specular value, unclamped."""
+    """The hdr eval: m_D / pi cos(theta_o) + the same specular value, unclamped."""
     spec = m_s[None, :] * ward_vectors(d, w, alpha_t, alpha_b)[:, None]
     return m_d[None, :] / np.pi * _dot(d, N)[:, None] + spec
 
@@ -83,7 +83,7 @@ def load(mode="hdr", alpha_t=0.1, alpha_b=0.1, formula="vectors", m_d=M_D, m_s=M
 
 
 # ----------------------------------------------------------------------------
-#  1-2. Scanline == the lecture; hdr == the issue's formula
+#  1-2. Scanline == the lecture; hdr == the normalised formula
 # ----------------------------------------------------------------------------
 
 @pytest.mark.parametrize("formula", ["vectors", "angles"])
@@ -101,7 +101,7 @@ def test_scanline_matches_lecture(rng, formula, alpha_t, alpha_b):
 
 @pytest.mark.parametrize("formula", ["vectors", "angles"])
 @pytest.mark.parametrize("alpha_t, alpha_b", ALPHAS)
-def test_hdr_matches_issue_formula(rng, formula, alpha_t, alpha_b):
+def test_hdr_matches_normalised_formula(rng, formula, alpha_t, alpha_b):
     d, w = pairs(rng, 4096, alpha_t, alpha_b)
     v, _ = evaluate(load("hdr", alpha_t, alpha_b, formula), wi=w, wo=d)
     np.testing.assert_allclose(v, ward_hdr(d, w, M_D, M_S, alpha_t, alpha_b),

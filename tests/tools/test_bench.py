@@ -1,14 +1,19 @@
-"""mi-brdfs bench --quick: every output, every group, finite numbers; the efficiency maths."""
+"""mi-brdfs bench --quick: every output, every group, finite numbers; a smoke
+test that says so; the report-folder rule; the efficiency maths."""
 import csv
 import json
 import math
+import os
+import shutil
 import subprocess
 import sys
 
 import numpy as np
 import pytest
 
-from mi_brdfs.tools import bench
+from mi_brdfs.bsdfs import BY_NAME
+from mi_brdfs.tools import bench, catalog, cli
+from mi_brdfs.tools.bench import anatomy
 
 
 def test_efficiency_by_hand():
@@ -39,6 +44,7 @@ def results(tmp_path_factory):
     run = subprocess.run([sys.executable, "-m", "mi_brdfs", "bench", "--quick", "-o", str(out),
                           "--cache", str(cache)], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
+    assert "smoke test" in run.stdout and "not measurements" in run.stdout
     return out, json.loads((out / "results.json").read_text()), cache
 
 
@@ -114,7 +120,7 @@ def test_materials_each_kind_and_count_in_its_own_process(results):
     _, r, _ = results
     rows = r["groups"]["materials"]
     assert {(row["name"], row["materials"]) for row in rows} == {
-        (f"{p} vs {b}", n) for p, b in bench.MATERIAL_PAIRS for n in bench.QUICK.materials}
+        (f"{p} vs {b}", n) for p, b in catalog.BENCH_MATERIAL_PAIRS for n in bench.QUICK.materials}
     for row in rows:
         for side in ("plugin", "builtin"):
             assert row[f"{side}_peak_mib"] > 10                     # measured by the child
@@ -138,20 +144,21 @@ def test_frozen_passes_replay(results):
 
 def test_kernels_and_tracing_every_pair_and_method(results):
     _, r, _ = results
-    pairs = {name for name, _, _ in bench.BSDF_PAIRS}
-    for group, names in (("kernels", pairs), ("tracing", pairs | {bench.TWO_LOBES[0]})):
+    pairs = {name for name, _, _ in catalog.BENCH_BUILTIN}
+    for group, names in (("kernels", pairs), ("tracing", pairs | {catalog.BENCH_TWO_LOBES[0]})):
         rows = r["groups"][group]
         assert {(row["name"], row["method"]) for row in rows} == {
             (n, m) for n in names for m in bench.BSDF_METHODS}
         assert all(row["ratio"] > 0 for row in rows)
     assert all(row["plugin_ops"] > 0 and row["builtin_ops"] > 0 for row in r["groups"]["kernels"])
     tracing = {(row["name"], row["method"]): row for row in r["groups"]["tracing"]}
-    sample = tracing[(bench.BSDF_PAIRS[0][0], "sample")]
+    ggx = catalog.BENCH_BUILTIN[0][0]
+    sample = tracing[(ggx, "sample")]
     # The path tracer calls sample and eval_pdf; the plugin's sample evaluates
     # its lobes at the sampled direction without calling eval or pdf again, and
     # each texture once (GGX conductor: specular_reflectance and alpha).
     assert sample["render_calls"] >= 1
-    assert tracing[(bench.BSDF_PAIRS[0][0], "eval_pdf")]["render_calls"] >= 1
+    assert tracing[(ggx, "eval_pdf")]["render_calls"] >= 1
     assert sample["inner_calls"] == "" and sample["texture_evals"] == 2
 
 
@@ -160,10 +167,10 @@ def test_energy_compensation_costed_per_model(results):
     import mitsuba as mi
     _, r, _ = results
     rows = {row["name"]: row for row in r["groups"]["energy"]}
-    assert set(rows) == {name for name, _ in bench.ENERGY_MODELS}
-    assert {config["type"] for _, config in bench.ENERGY_MODELS} == {
-        "cook_torrance", "phong", "blinn", "ward", "oren_nayar"}
-    for name, config in bench.ENERGY_MODELS:
+    assert set(rows) == {name for name, _ in catalog.BENCH_ENERGY}
+    assert {config["type"] for _, config in catalog.BENCH_ENERGY} == {
+        name for name, cls in BY_NAME.items() if cls.compensable}
+    for name, config in catalog.BENCH_ENERGY:
         row = rows[name]
         assert row["on_s"] > 0 and row["off_s"] > 0
         spec = mi.load_dict(config).albedo_spec()
@@ -181,3 +188,138 @@ def test_peak_memory_is_the_workers_own():
     ballast = np.ones(64 * 1024 * 1024 // 8 * 8)          # 512 MiB resident in this process
     own = bench.in_subprocess("materials", kind="diffuse", n=1, res=8, spp=1, repeats=1)
     assert ballast.sum() > 0 and own["peak_mib"] < 400, own["peak_mib"]
+
+
+# ----------------------------------------------------------------------------
+#  A smoke test that says so; every group's finding and plots
+# ----------------------------------------------------------------------------
+
+def test_quick_is_a_smoke_test_without_findings(results):
+    """Quick numbers flip between runs ("every model within 1.10x of lambert",
+    then 3.72x): a quick run draws no conclusions and says why."""
+    out, r, _ = results
+    assert r["smoke_test"] is True and r["findings"] == []
+    readme = (out / "README.md").read_text()
+    assert "smoke test" in readme and "not measurements" in readme
+    assert "## Findings" not in readme and "within" not in readme
+
+
+def test_every_group_has_its_finding_and_plots(results, tmp_path):
+    """What a full run writes, from the quick run's rows (the same columns):
+    a finding per group that has one, each plot a PNG file."""
+    _, r, _ = results
+    for name, group in bench.GROUPS.items():
+        rows = r["groups"][name]
+        if group.finding:
+            finding = group.finding(rows)
+            assert isinstance(finding, str) and len(finding) > 40, name
+        if group.plots:
+            for png in bench.plots.save(str(tmp_path), group.plots(rows)):
+                assert (tmp_path / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+        assert group.about, f"{name}: its runner says what it measures"
+
+
+def test_trade_fits_into_a_subfolder_the_marker_lists(results):
+    """The trade group runs mi-brdfs fit (quick: one material, two models) into
+    trade/, a fit report of its own, and the bench's marker lists its files."""
+    out, r, _ = results
+    rows = r["groups"]["trade"]
+    assert {row["model"] for row in rows} == set(bench.QUICK.trade_models)
+    assert all(not row["failed"] and 0 <= row["brdf_error"] <= 1.5 for row in rows)
+    fits = json.loads((out / "trade" / "fits.json").read_text())
+    assert [f["model"] for f in fits] == [row["model"] for row in rows]
+    listed = json.loads((out / ".mi-brdfs-report").read_text())["files"]
+    assert "trade/fits.json" in listed and "trade/index.html" in listed
+    assert all((out / name).is_file() for name in listed)
+
+
+# ----------------------------------------------------------------------------
+#  The report folder, the dependencies: refused before any work
+# ----------------------------------------------------------------------------
+
+def refused(args, capsys) -> str:
+    """Run mi-brdfs bench in this process; its one error line (exit status 1)."""
+    assert cli.main(["bench", "--quick", *args]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("mi-brdfs bench: error: "), err
+    assert "bench: builtin" not in "".join(err)                   # no group started
+    return err[0]
+
+
+def test_a_folder_of_the_users_is_refused_and_untouched(tmp_path, capsys, monkeypatch):
+    """``bench -o .`` in a folder holding a README.md and a results.csv (which a
+    bench report would write) is refused before any work; nothing is touched."""
+    (tmp_path / "README.md").write_text("mine")
+    (tmp_path / "results.csv").write_text("a,b\n")
+    cache = tmp_path.parent / f"{tmp_path.name}-cache"
+    monkeypatch.chdir(tmp_path)
+    line = refused(["-o", ".", "--cache", str(cache)], capsys)
+    assert "holding other files (README.md, results.csv)" in line and "nothing was written" in line
+    assert sorted(os.listdir(tmp_path)) == ["README.md", "results.csv"] and not cache.exists()
+    assert (tmp_path / "README.md").read_text() == "mine"
+
+
+def test_a_cache_inside_the_report_folder_is_refused(tmp_path, capsys):
+    line = refused(["-o", str(tmp_path / "out"), "--cache", str(tmp_path / "out" / "cache")], capsys)
+    assert "holds the input" in line
+    assert not (tmp_path / "out").exists()
+
+
+def test_an_unknown_group_is_refused(tmp_path, capsys):
+    line = refused(["--only", "builtin,nonesuch", "-o", str(tmp_path / "out")], capsys)
+    assert "unknown bench group 'nonesuch'; valid: builtin, models," in line
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_previous_report_is_replaced(results, tmp_path):
+    """A folder holding a bench report (its marker lists its files) takes the
+    next run: the old report's files go, the new one's come, nothing else."""
+    out, _, cache = results
+    previous = tmp_path / "report"
+    shutil.copytree(out, previous)
+    listed = json.loads((previous / ".mi-brdfs-report").read_text())
+    assert listed["command"] == "bench" and "builtin.png" in listed["files"]
+    assert cli.main(["bench", "--quick", "-q", "--only", "convergence", "-o", str(previous),
+                     "--cache", str(cache)]) == 0
+    assert sorted(os.listdir(previous)) == sorted(
+        [".mi-brdfs-report", "README.md", "results.csv", "results.json", "convergence.png"])
+
+
+def test_a_missing_dependency_stops_it_before_any_group(tmp_path, capsys, monkeypatch):
+    """Without matplotlib (a plain install without the reports extra) bench
+    says what to install before it runs a group, and writes nothing."""
+    monkeypatch.setitem(sys.modules, "matplotlib", None)        # import matplotlib fails
+    monkeypatch.setitem(sys.modules, "matplotlib.figure", None)
+    line = refused(["-o", str(tmp_path / "out")], capsys)
+    assert line.endswith("matplotlib is not installed; bench needs the report dependencies: "
+                         "pip install 'mi_brdfs[reports]'")
+    assert os.listdir(tmp_path) == []
+
+
+# ----------------------------------------------------------------------------
+#  Traced calls are the plugins' wherever the environment lives
+# ----------------------------------------------------------------------------
+
+def test_plugin_code_is_told_by_place_not_by_name(tmp_path):
+    """The tracing group counts the calls Mitsuba makes into a plugin (from
+    mitsuba/python/util.py): with the virtual environment inside a checkout
+    called mi_brdfs, Mitsuba's files have "mi_brdfs" in their path too, and
+    a filter on that name counted 0 calls."""
+    import mitsuba as mi
+    import mi_brdfs.bsdfs.base as base
+    util = os.path.join(os.path.dirname(mi.__file__), "python", "util.py")
+    venv = tmp_path / "mi_brdfs" / ".venv" / "lib" / "python3.11" / "site-packages"
+    assert anatomy.plugin_code(base.__file__)
+    assert not anatomy.plugin_code(util)
+    assert not anatomy.plugin_code(str(venv / "mitsuba" / "python" / "util.py"))
+    assert not anatomy.plugin_code(str(venv / "mi_brdfs" / "bsdfs" / "base.py"))  # another copy
+    assert not anatomy.plugin_code(anatomy.__file__)             # the bench's own code
+    assert not anatomy.plugin_code("~")                          # cProfile's built-ins
+    assert anatomy.bsdf_method((base.__file__, 1, "sample"))
+    assert not anatomy.bsdf_method((util, 1, "sample"))
+
+
+def test_calls_by_mitsuba_are_counted_in_a_render():
+    counts = anatomy.calls_in_a_render(catalog.BENCH_BUILTIN[0][1])
+    assert counts["sample"][0] >= 1 and counts["eval_pdf"][0] >= 1
+    assert counts["sample"][1] == counts["sample"][0]      # sample calls no other method

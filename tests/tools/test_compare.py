@@ -298,3 +298,101 @@ def test_hdr_flip_of_a_black_reference_does_not_abort(test_value):
     value, error_map = compare.flip(r, t, "hdr")
     assert error_map.shape == (6, 6)
     assert (value == 0) == (test_value == 0) and np.isfinite(value)
+
+
+# ----------------------------------------------------------------------------
+#  Every EXR that `mi-brdfs render` writes: mono (Y), RGB, RGBA, AOV layers
+# ----------------------------------------------------------------------------
+
+LAYERED_SCENE = """<scene version="3.0.0">
+    <default name="format" value="rgb"/>
+    <integrator type="aov">
+        <string name="aovs" value="dd.y:depth,nn:sh_normal,alb:albedo"/>
+        <integrator type="scanline" name="image"/>
+    </integrator>
+    <sensor type="perspective">
+        <transform name="to_world"><lookat origin="0, 0, 4" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <sampler type="independent"><integer name="sample_count" value="2"/></sampler>
+        <film type="hdrfilm"><integer name="width" value="12"/><integer name="height" value="10"/>
+            <string name="pixel_format" value="$format"/></film>
+    </sensor>
+    <emitter type="point"><point name="position" x="2" y="2" z="3"/><rgb name="intensity" value="9"/></emitter>
+    <shape type="sphere"><bsdf type="lambert"><rgb name="reflectance" value="0.2, 0.4, 0.8"/></bsdf></shape>
+</scene>
+"""
+
+
+@pytest.fixture(scope="module")
+def renders(tmp_path_factory):
+    """What `mi-brdfs render` writes: a mono render (Y and AOVs), an RGB
+    render and an RGBA one with the AOV layers alpha, albedo, depth, normals."""
+    work = tmp_path_factory.mktemp("renders")
+    scene = work / "layered.xml"
+    scene.write_text(LAYERED_SCENE)
+    files = {}
+    for name, args in {"mono": ["-m", "llvm_ad_mono", "-D", "format=luminance"],
+                       "rgb": [], "rgba": ["-D", "format=rgba"]}.items():
+        files[name] = str(work / f"{name}.exr")
+        done = subprocess.run([sys.executable, "-m", "mi_brdfs", "render", str(scene), "-q",
+                               "--passes", "1", "-o", files[name], *args],
+                              capture_output=True, text=True)
+        assert done.returncode == 0, done.stderr
+    return files
+
+
+def channels_of(path):
+    """The file's channels, read with OpenEXR here (not through the package)."""
+    import OpenEXR
+    with OpenEXR.File(path, separate_channels=True) as f:
+        return {k: np.asarray(v.pixels, dtype=np.float64) for k, v in f.channels().items()}
+
+
+def twice(path, tmp_path):
+    """A copy of an EXR with every channel doubled (written with OpenEXR)."""
+    import OpenEXR
+    data = {k: (v * 2).astype(np.float32) for k, v in channels_of(path).items()}
+    target = str(tmp_path / "twice.exr")
+    with OpenEXR.File({"compression": OpenEXR.ZIP_COMPRESSION,
+                       "type": OpenEXR.scanlineimage}, data) as f:
+        f.write(target)
+    return target
+
+
+def mae_of(ref, tmp_path, layer=None):
+    """compare's mean absolute error between ``ref`` and its double."""
+    compare.compare(ref, [twice(ref, tmp_path)], str(tmp_path / "rep"), layer=layer)
+    r = report(tmp_path)
+    return r["tests"][0]["metrics"]["mae"], r
+
+
+@pytest.mark.parametrize("kind, colour", [("mono", ["Y"] * 3), ("rgb", ["R", "G", "B"]),
+                                          ("rgba", ["R", "G", "B"])])     # alpha left out
+def test_reads_the_colour_of_every_render(renders, tmp_path, kind, colour):
+    found = channels_of(renders[kind])
+    assert set(colour) <= set(found) and ("A" in found) == (kind == "rgba")
+    expected = np.stack([found[c] for c in colour], axis=-1)
+    assert expected.max() > 0.05
+    mae, _ = mae_of(renders[kind], tmp_path)
+    assert mae == pytest.approx(np.abs(expected).mean(), rel=1e-5)       # |2x - x|
+
+
+@pytest.mark.parametrize("kind, layer, colour", [
+    ("rgba", "alb", ["alb.R", "alb.G", "alb.B"]),
+    ("rgb", "nn", ["nn.X", "nn.Y", "nn.Z"]),
+    ("mono", "dd.y", ["dd.y.T"] * 3),            # one channel, in all three
+])
+def test_layer_picks_an_aov(renders, tmp_path, kind, layer, colour):
+    found = channels_of(renders[kind])
+    expected = np.stack([found[c] for c in colour], axis=-1)
+    assert np.abs(expected).max() > 0.1
+    mae, r = mae_of(renders[kind], tmp_path, layer)
+    assert r["layer"] == layer and mae == pytest.approx(np.abs(expected).mean(), rel=1e-5)
+
+
+def test_an_unknown_layer_names_the_layers(renders, tmp_path, capsys):
+    from mi_brdfs.tools import cli
+    ref = renders["rgba"]
+    assert cli.main(["compare", ref, ref, "-o", str(tmp_path / "rep"), "--layer", "albedo"]) == 1
+    assert capsys.readouterr().err.strip() == (
+        f"mi-brdfs compare: error: {ref}: no layer 'albedo'; its layers: (base), alb, dd.y, nn")
+    assert not (tmp_path / "rep").exists()

@@ -166,3 +166,28 @@ def test_an_interrupted_report_leaves_the_target_as_it_was(tmp_path):
             Path(tmp, "index.html").write_text("half")
             raise KeyboardInterrupt
     assert os.listdir(tmp_path) == []
+
+
+def test_a_report_with_subfolders_is_replaced_and_nothing_else_goes(tmp_path):
+    """A report may hold subfolders (the bench's fit sweep): its marker lists
+    their files; replacing it removes those files and the emptied subfolders,
+    and a user's file added in a subfolder makes the folder foreign."""
+    target = tmp_path / "report"
+    for round_ in range(2):
+        with outputs.report_dir(str(target), "test") as tmp:
+            os.makedirs(os.path.join(tmp, "trade", "fits"))
+            for name in ("a.txt", "trade/b.txt", f"trade/fits/c{round_}.xml"):
+                with open(os.path.join(tmp, name), "w") as f:
+                    f.write(name)
+    listed = json.loads((target / outputs.MARKER).read_text())["files"]
+    assert listed == ["a.txt", "trade/b.txt", "trade/fits/c1.xml"]
+    assert not (target / "trade" / "fits" / "c0.xml").exists()       # the old report's own
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".tmp")]
+    (target / "trade" / "mine.txt").write_text("the user's")
+    with pytest.raises(outputs.OutputError, match="trade/mine.txt"):
+        outputs.check_report_dir(str(target))
+    assert (target / "trade" / "mine.txt").read_text() == "the user's"
+    bad = tmp_path / "bad"
+    bad.mkdir()
+    (bad / outputs.MARKER).write_text(json.dumps({"command": "x", "files": ["../outside.txt"]}))
+    assert outputs.previous_report(str(bad)) is None

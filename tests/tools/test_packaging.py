@@ -9,6 +9,7 @@ import sys
 import zipfile
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -78,14 +79,22 @@ def test_wheel_contents(wheel):
     assert any("extra == \"reports\"" in r and "scipy" in r for r in requires)
 
 
-def test_wheel_in_a_fresh_venv_renders_course_from_another_folder(wheel, tmp_path):
-    venv = tmp_path / "venv"
+@pytest.fixture(scope="module")
+def installed(wheel, tmp_path_factory):
+    """A fresh virtual environment with the wheel (no report extras): its
+    python, its mi-brdfs, and an environment without this checkout's paths."""
+    venv = tmp_path_factory.mktemp("installed") / "venv"
     run([sys.executable, "-m", "venv", str(venv)])
     python, tool = venv / "bin" / "python", venv / "bin" / "mi-brdfs"
     run([str(python), "-m", "pip", "install", "-q", str(wheel)])
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "DRJIT_LIBLLVM_PATH")}
+    return venv, python, tool, env
+
+
+def test_wheel_in_a_fresh_venv_renders_course_from_another_folder(installed, tmp_path):
+    venv, python, tool, env = installed
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir()
-    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "DRJIT_LIBLLVM_PATH")}
     out = run([str(tool), "render", "course", "-D", "res=24", "--spp", "2", "-q",
                "-o", "course.exr", "-o", "course.png"], cwd=elsewhere, env=env)
     assert "course: 24x24, 2 spp" in out.stdout
@@ -104,3 +113,27 @@ def test_wheel_in_a_fresh_venv_renders_course_from_another_folder(wheel, tmp_pat
     assert lines[0].endswith("is not installed; compare needs the report dependencies: "
                              "pip install 'mi_brdfs[reports]'")
     assert sorted(os.listdir(elsewhere)) == ["course.exr", "course.png"]     # nothing started
+
+
+def readme_python_example() -> str:
+    """The first Python block of the README's "From Python" section, verbatim."""
+    text = (ROOT / "README.md").read_text()
+    section = text[text.index("\n## From Python\n"):]
+    start = section.index("```python\n") + len("```python\n")
+    return section[start:section.index("\n```", start) + 1]
+
+
+def test_readme_python_example_runs_as_written_from_another_folder(installed, tmp_path):
+    """Pasted into a file in an empty folder and run with the installed package:
+    it loads a bundled scene, renders it and writes the picture it names."""
+    import mitsuba as mi
+
+    _, python, _, env = installed
+    code = readme_python_example()
+    assert "mi_brdfs.scenes.path(" in code and "mi.render(" in code
+    (tmp_path / "example.py").write_text(code)
+    run([str(python), "example.py"], cwd=tmp_path, env=env)
+    written = sorted(set(os.listdir(tmp_path)) - {"example.py"})
+    assert written == ["phong.png"]
+    image = np.array(mi.Bitmap(str(tmp_path / "phong.png")))
+    assert image.shape == (128, 128, 3) and image.max() > 100 and image.mean() > 5

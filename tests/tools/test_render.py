@@ -62,10 +62,25 @@ def test_outputs_by_extension(tmp_path):
     assert header["mi_brdfs"] == "0.1.0" and header["mitsuba"].startswith("3.")
 
 
+@pytest.mark.parametrize("spp, passes, ran", [(16, 32, "1," * 15 + "1"), (10, 4, "3,3,2,2"),
+                                             (4, 1, "4")])
+def test_metadata_records_the_passes_that_ran(tmp_path, spp, passes, ran):
+    """More passes than samples: one sample per pass, as many passes as samples."""
+    out = tmp_path / "x.exr"
+    assert cli.main(["render", "lambert", "-D", "res=8", "--spp", str(spp), "--passes",
+                     str(passes), "-q", "-o", str(out)]) == 0
+    with OpenEXR.File(str(out)) as f:
+        header = dict(f.header())
+    assert header["pass_spp"] == ran
+    assert header["passes"] == str(len(ran.split(","))) and header["spp"] == str(spp)
+
+
 def test_channel_names_of_mitsubas_aov_integrator():
     film = ["R", "G", "B", "img.R", "img.G", "img.B", "img.A", "dd.y.T", "nn.X", "nn.Y", "nn.Z"]
     assert output.channel_names(film, 7) == ["R", "G", "B", "dd.y.T", "nn.X", "nn.Y", "nn.Z"]
     assert output.channel_names(["R", "G", "B", "dd.y.T"], 1) == ["dd.y.T"]   # no nested image
+    mono = ["Y", "img.R", "img.G", "img.B", "img.A", "dd.y.T", "nn.X", "nn.Y", "nn.Z"]
+    assert output.channel_names(mono, 5) == ["Y", "dd.y.T", "nn.X", "nn.Y", "nn.Z"]
     assert output.channel_names(["R", "G", "B"], 3) == ["R", "G", "B"]
     assert output.channel_names(["R", "G", "B"], 5) == ["C0", "C1", "C2", "C3", "C4"]
 

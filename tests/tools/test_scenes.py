@@ -96,3 +96,12 @@ def test_scenes_lists_every_bundled_scene(capsys):
     assert cli.main(["scenes"]) == 0
     listed = [line.split()[0] for line in capsys.readouterr().out.splitlines()]
     assert listed == ALL and "course" in listed
+
+
+def test_scenes_path_from_python():
+    import mi_brdfs
+    found = mi_brdfs.scenes.path("course")
+    assert os.path.isabs(found) and found == mi_brdfs.scenes.path("course.xml")
+    assert Path(found).read_text() == (SCENES / "course.xml").read_text()
+    with pytest.raises(ValueError, match="no bundled scene 'nope'; bundled scenes: blinn, "):
+        mi_brdfs.scenes.path("nope")

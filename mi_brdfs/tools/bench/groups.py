@@ -1,0 +1,326 @@
+"""The bench's groups: each a function of the settings and the reference cache
+returning its rows (a list of flat dicts), its configurations from the
+catalog (``catalog.BENCH_*``, :func:`catalog.bench_models`).
+
+:data:`GROUPS`, at the end, is the one place a group is added: its runner
+(here), its finding (report.py) and its plots (plots.py), the last two
+optional. The runner's docstring says what the group measures; the report
+shows it above the group's table.
+"""
+from __future__ import annotations
+
+import os
+import statistics
+import time
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from .. import catalog
+from . import plots, report
+from .measure import FULL, Settings, References, efficiency, image, relmse, scene_dict, timed
+from .workers import in_subprocess
+
+
+# ----------------------------------------------------------------------------
+#  In this process
+# ----------------------------------------------------------------------------
+
+def builtin(s: Settings, refs: References) -> list[dict]:
+    """Python plugin vs Mitsuba's C++ built-in, the same BSDF, scene and spp: the
+    time ratio, and where the time goes (Python tracing, LLVM codegen, kernel
+    execution, from Dr.Jit's kernel history)."""
+    import mitsuba as mi
+    rows = []
+    for name, ours, builtin in catalog.BENCH_BUILTIN:
+        t_ours = timed(mi.load_dict(scene_dict(ours, s.res)), s.spp, s.repeats)
+        t_builtin = timed(mi.load_dict(scene_dict(builtin, s.res)), s.spp, s.repeats)
+        row = {"name": name, "plugin_s": t_ours["median_s"], "builtin_s": t_builtin["median_s"],
+               "ratio": t_ours["median_s"] / t_builtin["median_s"]}
+        for part in ("compile", "tracing", "execution", "codegen"):
+            row[f"plugin_{part}_s"] = t_ours[f"{part}_s"]
+            row[f"builtin_{part}_s"] = t_builtin[f"{part}_s"]
+        rows.append(row)
+    return rows
+
+
+def models(s: Settings, refs: References) -> list[dict]:
+    """Render time per spp of every model and variant (catalog.bench_models),
+    relative to lambert."""
+    import mitsuba as mi
+    rows = []
+    for name, config in catalog.bench_models():
+        t = timed(mi.load_dict(scene_dict(config, s.res)), s.spp, s.repeats)
+        rows.append({"name": name, "median_s": t["median_s"], "per_spp_s": t["median_s"] / s.spp,
+                     "compile_s": t["compile_s"]})
+    base = next(r["median_s"] for r in rows if r["name"] == "lambert")
+    for r in rows:
+        r["relative_to_lambert"] = r["median_s"] / base
+    return rows
+
+
+def oren_nayar(s: Settings, refs: References) -> list[dict]:
+    """The Oren-Nayar table at several resolutions vs the exact formulas: time
+    and error against the exact render (same seed: no noise)."""
+    import mitsuba as mi
+    base = catalog.BENCH_OREN_NAYAR
+    exact_scene = mi.load_dict(scene_dict({**base, "method": "exact"}, s.res))
+    exact = timed(exact_scene, s.spp, s.repeats)
+    exact_img = image(exact_scene, s.spp, seed=99)
+    again = image(exact_scene, s.spp, seed=99)        # same seed: no noise
+    rows = [{"name": "exact", "table_resolution": 0, "median_s": exact["median_s"],
+             "speedup": 1.0, "relmse_vs_exact": relmse(again, exact_img),
+             "max_abs_vs_exact": float(np.max(np.abs(again - exact_img)))}]
+    for n in s.table_resolutions:
+        scene = mi.load_dict(scene_dict({**base, "method": "table", "table_resolution": n}, s.res))
+        t = timed(scene, s.spp, s.repeats)
+        img = image(scene, s.spp, seed=99)
+        rows.append({"name": f"table {n}", "table_resolution": n, "median_s": t["median_s"],
+                     "speedup": exact["median_s"] / t["median_s"],
+                     "relmse_vs_exact": relmse(img, exact_img),
+                     "max_abs_vs_exact": float(np.max(np.abs(img - exact_img)))})
+    return rows
+
+
+def sampling(s: Settings, refs: References) -> list[dict]:
+    """Glossy lobes: cosine-hemisphere vs the lobe's importance sampling (and
+    full-distribution vs visible-normal microfacet sampling), error at equal
+    spp and efficiency."""
+    import mitsuba as mi
+    rows = []
+    for name, config, strategies in catalog.BENCH_SAMPLING:
+        reference = refs.get(scene_dict({**config, **strategies[0][1]}, s.res))
+        for label, options in strategies:
+            scene = mi.load_dict(scene_dict({**config, **options}, s.res))
+            t = timed(scene, s.spp, s.repeats)
+            err = relmse(image(scene, s.spp, seed=7), reference)
+            rows.append({"name": name, "strategy": label, "spp": s.spp,
+                         "median_s": t["median_s"], "relmse": err,
+                         "efficiency": efficiency(err, t["median_s"])})
+        best = rows[-len(strategies)]["efficiency"]
+        for r in rows[-len(strategies):]:
+            r["efficiency_vs_first"] = r["efficiency"] / best if best else float("nan")
+    return rows
+
+
+def integrators(s: Settings, refs: References) -> list[dict]:
+    """Scan-line direct lighting, Mitsuba's ``direct``, ``path`` with max depth
+    2, 3 and 8, against a converged path-traced reference."""
+    import mitsuba as mi
+    bsdf = catalog.BENCH_GLOSSY
+    reference = refs.get(scene_dict(bsdf, s.res, catalog.BENCH_REFERENCE_INTEGRATOR))
+    rows = []
+    for name, integrator in catalog.BENCH_INTEGRATORS:
+        scene = mi.load_dict(scene_dict(bsdf, s.res, integrator))
+        t = timed(scene, s.spp, s.repeats)
+        err = relmse(image(scene, s.spp, seed=5), reference)
+        rows.append({"name": name, "median_s": t["median_s"], "relmse": err,
+                     "efficiency": efficiency(err, t["median_s"])})
+    return rows
+
+
+def convergence(s: Settings, refs: References) -> list[dict]:
+    """Error vs spp (log-log) and its slope (about -1 for relMSE)."""
+    import mitsuba as mi
+    d = scene_dict(catalog.BENCH_GLOSSY, s.res)
+    reference = refs.get(d)
+    scene = mi.load_dict(d)
+    rows = []
+    for spp in s.spp_ladder:
+        errors = [relmse(image(scene, spp, seed=100 + i), reference) for i in range(3)]
+        rows.append({"spp": spp, "relmse": float(np.mean(errors))})
+    x = np.log([r["spp"] for r in rows])
+    y = np.log([r["relmse"] for r in rows])
+    slope = float(np.polyfit(x, y, 1)[0])
+    for r in rows:
+        r["slope"] = slope
+    return rows
+
+
+def scaling(s: Settings, refs: References) -> list[dict]:
+    """Render time vs resolution and vs number of lights (scan-line)."""
+    import mitsuba as mi
+    bsdf, integrator = catalog.BENCH_SCALING
+    rows = []
+    for res in s.resolutions:
+        t = timed(mi.load_dict(scene_dict(bsdf, res, integrator)), s.spp, s.repeats)
+        rows.append({"axis": "resolution", "value": res, "median_s": t["median_s"]})
+    for n in s.light_counts:
+        t = timed(mi.load_dict(scene_dict(bsdf, s.res, integrator, lights=n)), s.spp, s.repeats)
+        rows.append({"axis": "lights", "value": n, "median_s": t["median_s"]})
+    return rows
+
+
+def lobes(s: Settings, refs: References) -> list[dict]:
+    """Model only what the scene requires: a plugin with a lobe switched off
+    renders at the cost of the model without that lobe."""
+    import mitsuba as mi
+    rows = []
+    for name, off, reference in catalog.BENCH_LOBES_OFF:
+        flags = mi.load_dict(off).flags()
+        t_off = timed(mi.load_dict(scene_dict(off, s.res)), s.spp, s.repeats)
+        t_ref = timed(mi.load_dict(scene_dict(reference, s.res)), s.spp, s.repeats)
+        rows.append({"name": name, "lobe_off_s": t_off["median_s"],
+                     "reference_s": t_ref["median_s"],
+                     "ratio": t_off["median_s"] / t_ref["median_s"],
+                     "diffuse_lobe": bool(flags & mi.BSDFFlags.Diffuse),
+                     "glossy_lobe": bool(flags & mi.BSDFFlags.Glossy)})
+    return rows
+
+
+def energy(s: Settings, refs: References) -> list[dict]:
+    """Energy compensation: render time of each compensated model with
+    energy_compensation on vs off (same scene and spp), and the time to build
+    its albedo table (as python -m mi_brdfs.tools.tables does)."""
+    import mitsuba as mi
+
+    from ...bsdfs import energy as tables
+    built: dict[str, float] = {}
+    rows = []
+    for name, config in catalog.BENCH_ENERGY:
+        t_off = timed(mi.load_dict(scene_dict(config, s.res)), s.spp, s.repeats)
+        t_on = timed(mi.load_dict(scene_dict({**config, "energy_compensation": True}, s.res)),
+                     s.spp, s.repeats)
+        spec = mi.load_dict(config).albedo_spec()
+        if spec is not None and spec.name not in built:
+            start = time.perf_counter()
+            tables.build(spec, s.table_samples)
+            built[spec.name] = time.perf_counter() - start
+        rows.append({"name": name, "off_s": t_off["median_s"], "on_s": t_on["median_s"],
+                     "ratio": t_on["median_s"] / t_off["median_s"],
+                     "table": spec.name if spec else "(analytic)",
+                     "table_nodes": int(np.prod([a.n for a in spec.axes])) if spec else 0,
+                     "table_samples": s.table_samples if spec else 0,
+                     "table_build_s": built[spec.name] if spec else 0.0})
+    return rows
+
+
+# ----------------------------------------------------------------------------
+#  In processes of their own (workers.py)
+# ----------------------------------------------------------------------------
+
+MATERIALS_COLUMNS = {     # column: the worker's figure
+    "first_s": "first_wall_s", "first_tracing_s": "first_tracing_s",
+    "first_codegen_s": "first_codegen_s", "warm_s": "wall_s", "tracing_s": "tracing_s",
+    "codegen_s": "codegen_s", "execution_s": "execution_s", "frozen_s": "frozen_s",
+    "frozen_recordings": "frozen_recordings", "peak_mib": "peak_mib"}
+
+
+def materials(s: Settings, refs: References) -> list[dict]:
+    """N spheres, each with its own material (path depth 3, constant
+    environment), plugin vs built-in (catalog.BENCH_MATERIAL_PAIRS): first and
+    warm render split into tracing, code generation and kernel execution, a
+    frozen render's replay (render/frozen.py), and peak memory; each (kind, N)
+    in processes of its own (``rounds`` of them, alternating kinds; medians).
+    The first render loads its kernels from Dr.Jit's disk cache when an
+    earlier run compiled them."""
+    rows = []
+    for plugin, builtin in catalog.BENCH_MATERIAL_PAIRS:
+        for n in s.materials:
+            # Each (kind, n) in processes of its own, the kinds alternating; the
+            # median over the rounds of each process's figures.
+            runs: dict[str, list[dict]] = {plugin: [], builtin: []}
+            for _ in range(s.rounds):
+                for kind in (plugin, builtin):
+                    runs[kind].append(in_subprocess("materials", kind=kind, n=n,
+                                                    res=s.materials_res, spp=s.materials_spp,
+                                                    repeats=s.repeats))
+            row = {"name": f"{plugin} vs {builtin}", "materials": n}
+            for side, kind in (("plugin", plugin), ("builtin", builtin)):
+                for column, key in MATERIALS_COLUMNS.items():
+                    row[f"{side}_{column}"] = statistics.median(r[key] for r in runs[kind])
+            row["first_ratio"] = row["plugin_first_s"] / row["builtin_first_s"]
+            row["warm_ratio"] = row["plugin_warm_s"] / row["builtin_warm_s"]
+            row["execution_ratio"] = row["plugin_execution_s"] / row["builtin_execution_s"]
+            row["frozen_ratio"] = row["plugin_frozen_s"] / row["builtin_frozen_s"]
+            row["memory_ratio"] = row["plugin_peak_mib"] / row["builtin_peak_mib"]
+            rows.append(row)
+    return rows
+
+
+def frozen(s: Settings, refs: References) -> list[dict]:
+    """render_passes at the largest N of materials in 1 and more passes (the
+    same spp in all), traced and frozen, each in a process of its own."""
+    n = s.materials[-1]
+    rows = []
+    for passes in s.frozen_passes:
+        for freeze in ((False,) if passes == 1 else (False, True)):
+            r = in_subprocess("passes", n=n, res=s.materials_res, spp=s.materials_spp,
+                              passes=passes, freeze=freeze, repeats=3)
+            rows.append({"materials": n, "spp": s.materials_spp, "passes": passes,
+                         "frozen": freeze, "first_s": r["first_s"], "warm_s": r["warm_s"],
+                         "peak_mib": r["peak_mib"], "note": r["note"]})
+    one = next(r for r in rows if r["passes"] == 1)
+    for r in rows:
+        r["first_vs_1_pass"] = r["first_s"] / one["first_s"]
+        r["warm_vs_1_pass"] = r["warm_s"] / one["warm_s"]
+    return rows
+
+
+def kernels(s: Settings, refs: References) -> list[dict]:
+    """eval, pdf, eval_pdf and sample of many direction pairs: kernel execution
+    time, plugin and built-in (catalog.BENCH_BUILTIN) alternating in one
+    process, on one thread (stable on shared cores)."""
+    return in_subprocess("kernels", lanes=s.kernel_lanes, repeats=s.repeats)["rows"]
+
+
+def tracing(s: Settings, refs: References) -> list[dict]:
+    """Tracing time of one call of each method, plugin vs built-in, and what the
+    plugin's call does: texture evaluations, Mitsuba objects built, BSDF methods
+    it calls again, helpers called more than once, and how often a path-traced
+    render calls each method."""
+    return in_subprocess("tracing", lanes=1024, calls=25 * s.repeats)["rows"]
+
+
+def trade(s: Settings, refs: References, out_dir: str) -> list[dict]:
+    """Which course model for which material: every model fitted by mi-brdfs fit
+    to the fixed materials of mi_brdfs.tools.fit.trade (gold, copper, aluminium,
+    plastic, principled, diffuse), its BRDF error, its image error in the
+    standard scene and its render cost against the material's own plugin; the
+    fit report, with its Pareto plots, renders and each fit as XML, is in the
+    folder trade/."""
+    from ..fit import trade as sweep
+    targets = sweep.TARGETS[:s.trade_targets or None]
+    labels = {spec: label for label, spec in targets}
+    records = sweep.run(os.path.join(out_dir, "trade"), quick=s is not FULL, targets=targets,
+                        models=list(s.trade_models) or None, show=lambda *a: None)
+    keys = ("model", "brdf_error", "image_relmse", "image_flip", "cost_ratio", "seconds")
+    return [{"material": labels[r["target"]], **{k: r.get(k) for k in keys},
+             "failed": r.get("error", "")} for r in records]
+
+
+# ----------------------------------------------------------------------------
+#  Every group, in the order they run
+# ----------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Group:
+    name: str
+    run: Callable[..., list[dict]]                                # (settings, references)
+    finding: Callable[[list[dict]], str | None] | None = None    # report.py
+    plots: Callable[[list[dict]], dict] | None = None             # plots.py
+    writes: bool = False      # run() also writes files: it gets out_dir, the report folder
+
+    @property
+    def about(self) -> str:
+        """What the group measures: its runner's docstring, on one line."""
+        return " ".join((self.run.__doc__ or "").split())
+
+
+GROUPS: dict[str, Group] = {g.name: g for g in [
+    Group("builtin", builtin, report.builtin, plots.builtin),
+    Group("models", models, report.models, plots.models),
+    Group("oren_nayar", oren_nayar, report.oren_nayar, plots.oren_nayar),
+    Group("sampling", sampling, report.sampling, plots.sampling),
+    Group("integrators", integrators, report.integrators, plots.integrators),
+    Group("convergence", convergence, report.convergence, plots.convergence),
+    Group("scaling", scaling, report.scaling, plots.scaling),
+    Group("lobes", lobes, report.lobes, plots.lobes),
+    Group("energy", energy, report.energy),
+    Group("materials", materials, report.materials, plots.materials),
+    Group("frozen", frozen, report.frozen, plots.frozen),
+    Group("kernels", kernels, report.kernels, plots.kernels),
+    Group("tracing", tracing, report.tracing, plots.tracing),
+    Group("trade", trade, report.trade, writes=True),
+]}

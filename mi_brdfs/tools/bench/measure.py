@@ -1,0 +1,287 @@
+"""How the bench measures: its settings, its scenes, timed renders and their
+split from Dr.Jit's kernel history, errors against cached references, BSDF
+calls on direction pairs, peak memory and the machine.
+
+Every timing is the median of ``repeats`` renders after a warm-up render that
+compiles the kernels (the warm-up's extra time is reported as compile time).
+Every error is the relative MSE (pbrt's form, mean((t - r)²/(r + 0.01)²))
+against a converged reference rendered once at high spp and cached on disk,
+keyed by the scene and the settings. Efficiency is 1 / (relMSE × seconds).
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+import platform
+import statistics
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import catalog
+from ..analysis import camera
+
+
+@dataclass
+class Settings:
+    res: int
+    spp: int
+    repeats: int
+    ref_spp: int
+    spp_ladder: tuple[int, ...]
+    resolutions: tuple[int, ...]
+    light_counts: tuple[int, ...]
+    table_resolutions: tuple[int, ...]
+    # The many-materials scene (materials, frozen): sphere counts, pixels, spp.
+    materials: tuple[int, ...]
+    materials_res: int
+    materials_spp: int
+    frozen_passes: tuple[int, ...]
+    rounds: int                       # processes per (kind, N) in materials
+    kernel_lanes: int                 # direction pairs per BSDF kernel (kernels)
+    table_samples: int                # quadrature samples per axis of a table build (energy)
+    trade_targets: int                # materials of the fit sweep (trade; 0: every one)
+    trade_models: tuple[str, ...]     # models it fits (empty: every course model)
+
+
+# --quick: a smoke test that every group runs (tiny scene, few repeats): its
+# numbers are not measurements.
+QUICK = Settings(res=24, spp=4, repeats=3, ref_spp=64, spp_ladder=(1, 2, 4, 8),
+                 resolutions=(16, 32), light_counts=(1, 2, 4), table_resolutions=(8, 32),
+                 materials=(1, 3), materials_res=16, materials_spp=4, frozen_passes=(1, 2, 4),
+                 rounds=1, kernel_lanes=2**14, table_samples=8, trade_targets=1,
+                 trade_models=("lambert", "cook_torrance/ggx/smith"))
+FULL = Settings(res=192, spp=16, repeats=7, ref_spp=4096, spp_ladder=(1, 2, 4, 8, 16, 32, 64, 128),
+                resolutions=(64, 128, 256, 512), light_counts=(1, 2, 4, 8, 16, 32),
+                table_resolutions=(4, 8, 16, 32, 64, 128, 256),
+                materials=(1, 10, 50, 200), materials_res=128, materials_spp=64,
+                frozen_passes=(1, 8, 32), rounds=3, kernel_lanes=2**22, table_samples=128,
+                trade_targets=0, trade_models=())
+
+
+# ----------------------------------------------------------------------------
+#  Errors
+# ----------------------------------------------------------------------------
+
+def efficiency(relmse: float, seconds: float) -> float:
+    """1 / (relMSE × time); inf for an exact result."""
+    if relmse <= 0:
+        return math.inf
+    return 1.0 / (relmse * seconds)
+
+
+def pareto(points: list[tuple[float, float]]) -> list[bool]:
+    """For (time, error) points: True where no other point is at least as fast
+    and as accurate and strictly better in one of the two."""
+    front = []
+    for i, (t, e) in enumerate(points):
+        dominated = any(t2 <= t and e2 <= e and (t2 < t or e2 < e)
+                        for j, (t2, e2) in enumerate(points) if j != i)
+        front.append(not dominated)
+    return front
+
+
+def relmse(test: np.ndarray, ref: np.ndarray) -> float:
+    return float(np.mean((test - ref) ** 2 / (ref + 0.01) ** 2))
+
+
+# ----------------------------------------------------------------------------
+#  Scenes
+# ----------------------------------------------------------------------------
+
+def scene_dict(bsdf: dict, res: int, integrator: dict | None = None, lights: int = 1,
+               env: float = 0.3, plane: bool = True) -> dict:
+    """A sphere on a plane, point lights and a dim constant environment."""
+    import mitsuba as mi
+    T = mi.ScalarTransform4f
+    d = {
+        "type": "scene",
+        "integrator": integrator or {"type": "path", "max_depth": 3},
+        "sensor": camera(res, 36, origin=(0.0, 1.2, 4.0)),
+        "sphere": {"type": "sphere", "bsdf": bsdf},
+        "env": {"type": "constant", "radiance": {"type": "rgb", "value": env}},
+    }
+    if plane:
+        d["plane"] = {"type": "rectangle", "bsdf": dict(catalog.BENCH_FLOOR),
+                      "to_world": T().translate([0, -1, 0]) @ T().rotate([1, 0, 0], -90)
+                      @ T().scale(4)}
+    for i in range(lights):
+        angle = 2 * math.pi * i / max(lights, 1)
+        d[f"light{i}"] = {"type": "point",
+                          "position": [3 * math.cos(angle), 3.0, 3 * math.sin(angle) + 1.5],
+                          "intensity": {"type": "rgb", "value": 12.0 / lights}}
+    return d
+
+
+def spheres_scene(kind: str, n: int, res: int, max_depth: int = 3) -> dict:
+    """``n`` unit spheres in a square grid, each with its own ``kind`` material
+    (catalog.BENCH_MATERIALS), in a constant environment, path traced (the full
+    run: 200 spheres, depth 3, 128², 64 spp)."""
+    side = math.ceil(math.sqrt(n))
+    spacing, fov = 2.5, 40.0
+    distance = 1.2 * side * spacing / (2 * math.tan(math.radians(fov / 2))) + 2
+    d = {"type": "scene", "integrator": {"type": "path", "max_depth": max_depth},
+         "sensor": camera(res, fov, origin=(0.0, 0.0, distance)),
+         "env": {"type": "constant", "radiance": {"type": "rgb", "value": 1.0}}}
+    for i in range(n):
+        x, y = (i % side - (side - 1) / 2) * spacing, (i // side - (side - 1) / 2) * spacing
+        d[f"sphere{i}"] = {"type": "sphere", "center": [x, y, 0.0], "radius": 1.0,
+                           "bsdf": catalog.BENCH_MATERIALS[kind](i / max(n - 1, 1))}
+    return d
+
+
+# ----------------------------------------------------------------------------
+#  Timing
+# ----------------------------------------------------------------------------
+
+def render(scene, spp: int, seed: int):
+    """``mi.render``, evaluated and waited for."""
+    import drjit as dr
+    import mitsuba as mi
+    image = mi.render(scene, spp=spp, seed=seed)
+    dr.eval(image)
+    dr.sync_thread()
+    return image
+
+
+def image(scene, spp: int, seed: int) -> np.ndarray:
+    """A render's RGB as a NumPy array."""
+    return np.array(render(scene, spp, seed))[..., :3]
+
+
+def timed(scene, spp: int, repeats: int) -> dict:
+    """Warm-up render (compiles), then the median of `repeats` renders, with the
+    kernel history's split of the last one: tracing, codegen, execution (s)."""
+    start = time.perf_counter()
+    render(scene, spp, seed=0)
+    first = time.perf_counter() - start
+    times = []
+    for r in range(repeats):
+        start = time.perf_counter()
+        render(scene, spp, seed=r + 1)
+        times.append(time.perf_counter() - start)
+    median = statistics.median(times)
+    split = measured(lambda: render(scene, spp, seed=repeats + 1))    # where the time goes
+    return {"median_s": median, "compile_s": max(first - median, 0.0), "times_s": times,
+            "kernels": split["kernels"], "execution_s": split["execution_s"],
+            "codegen_s": split["codegen_s"], "tracing_s": split["tracing_s"]}
+
+
+def measured(run) -> dict:
+    """Wall time of ``run()`` (which must evaluate its result) and its split from
+    Dr.Jit's kernel history (s): code generation (codegen and LLVM), kernel
+    execution, and tracing (the rest: Python and Dr.Jit building the kernels)."""
+    import drjit as dr
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    dr.kernel_history()                              # clear
+    start = time.perf_counter()
+    run()
+    dr.sync_thread()
+    wall = time.perf_counter() - start
+    history = dr.kernel_history()
+    dr.set_flag(dr.JitFlag.KernelHistory, False)
+    execution = sum(k.get("execution_time", 0.0) for k in history) / 1000
+    codegen = sum(k.get("codegen_time", 0.0) + k.get("backend_time", 0.0) for k in history) / 1000
+    return {"wall_s": wall, "kernels": len(history), "execution_s": execution,
+            "codegen_s": codegen, "tracing_s": max(wall - execution - codegen, 0.0),
+            "operations": sum(k.get("operation_count", 0) for k in history)}
+
+
+class References:
+    """Converged references, rendered once and cached on disk."""
+
+    def __init__(self, directory: str, spp: int):
+        self.directory, self.spp = directory, spp
+
+    def key(self, d: dict) -> str:
+        import mitsuba as mi
+        text = json.dumps(d, sort_keys=True, default=str) + f"|{self.spp}|{mi.__version__}"
+        return hashlib.sha1(text.encode()).hexdigest()[:16]
+
+    def get(self, d: dict) -> np.ndarray:
+        import mitsuba as mi
+
+        from ...render import exr
+        path = os.path.join(self.directory, f"ref-{self.key(d)}.exr")
+        if os.path.exists(path):
+            return exr.read_exr(path).astype(np.float64)
+        scene = mi.load_dict(d)
+        passes = max(1, self.spp // 256)
+        reference = sum(image(scene, self.spp // passes, seed=10_000 + i)
+                        for i in range(passes)) / passes
+        os.makedirs(self.directory, exist_ok=True)
+        exr.write_exr(path, reference)
+        return np.asarray(reference, dtype=np.float64)
+
+
+# ----------------------------------------------------------------------------
+#  BSDF calls on direction pairs (kernels, tracing)
+# ----------------------------------------------------------------------------
+
+BSDF_METHODS = ("eval", "pdf", "eval_pdf", "sample")
+
+
+def bsdf_inputs(lanes: int, seed: int = 1) -> dict:
+    """Random viewer and light directions above the surface and random samples,
+    evaluated (a kernel then holds the BSDF alone)."""
+    import drjit as dr
+    import mitsuba as mi
+    rng = np.random.default_rng(seed)
+
+    def hemisphere():
+        v = rng.normal(size=(3, lanes))
+        v /= np.linalg.norm(v, axis=0)
+        v[2] = np.abs(v[2])
+        return mi.Vector3f(*v.astype(np.float32))
+    si = dr.zeros(mi.SurfaceInteraction3f, lanes)
+    si.wi = hemisphere()
+    si.uv = mi.Point2f(*rng.random((2, lanes), dtype=np.float32))
+    x = {"ctx": mi.BSDFContext(), "si": si, "wo": hemisphere(),
+         "sample1": mi.Float(rng.random(lanes, dtype=np.float32)),
+         "sample2": mi.Point2f(*rng.random((2, lanes), dtype=np.float32))}
+    dr.eval(x["si"].wi, x["si"].uv, x["wo"], x["sample1"], x["sample2"])
+    return x
+
+
+def bsdf_call(bsdf, method: str, x: dict):
+    if method == "sample":
+        return bsdf.sample(x["ctx"], x["si"], x["sample1"], x["sample2"])
+    return getattr(bsdf, method)(x["ctx"], x["si"], x["wo"])
+
+
+# ----------------------------------------------------------------------------
+#  The process and the machine
+# ----------------------------------------------------------------------------
+
+def peak_mib() -> float:
+    """This process's peak resident memory in MiB: Linux's VmHWM, the high-water
+    mark of this program's own memory (ru_maxrss would also count the parent's
+    resident memory at fork time: a worker of a large bench process reported
+    the parent's 397 MiB for every kind), else ru_maxrss."""
+    try:
+        with open("/proc/self/status") as f:
+            for line in f:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1]) / 1024
+    except OSError:
+        pass
+    import resource
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+
+
+def machine() -> dict:
+    import drjit as dr
+    import mitsuba as mi
+    cpu = platform.processor()
+    try:
+        with open("/proc/cpuinfo") as f:
+            cpu = next(line.split(":", 1)[1].strip() for line in f if line.startswith("model name"))
+    except (OSError, StopIteration):
+        pass
+    return {"cpu": cpu, "cores": os.cpu_count(), "variant": mi.variant(),
+            "mitsuba": mi.__version__, "drjit": dr.__version__,
+            "llvm": ".".join(map(str, dr.detail.llvm_version())),
+            "python": platform.python_version()}

@@ -1,0 +1,233 @@
+"""What the bench writes: results.json, results.csv (group, row, key, value),
+and README.md with the tables and the findings — a plain-language answer per
+group, computed from the numbers of this run (one function per group, named
+after it, given the group's rows). A quick run is a smoke test: it draws no
+findings and its README says that its numbers are not measurements.
+"""
+from __future__ import annotations
+
+import csv
+import json
+import os
+
+import numpy as np
+
+SMOKE_TEST = ("Quick run (--quick): a smoke test that every group runs, on a tiny scene with "
+              "few repeats. Its numbers are not measurements and change from run to run; it "
+              "draws no findings. Run `mi-brdfs bench -o DIR` without --quick to measure.")
+
+
+# ----------------------------------------------------------------------------
+#  Findings, one per group
+# ----------------------------------------------------------------------------
+
+def builtin(rows: list[dict]) -> str:
+    ratios = ", ".join(f"{r['name'].split(' vs ')[0]} {r['ratio']:.3f}" for r in rows)
+    return (f"Python plugin / C++ built-in time ratio: {ratios} (parity is <= 1.05). "
+            "Tracing the Python code takes "
+            + ", ".join(f"{1e3 * r['plugin_tracing_s']:.2f} ms" for r in rows)
+            + " per render; kernel execution time ratios: "
+            + ", ".join(f"{r['plugin_execution_s'] / r['builtin_execution_s']:.3f}" for r in rows)
+            + ".")
+
+
+def models(rows: list[dict]) -> str:
+    worst = max(rows, key=lambda r: r["relative_to_lambert"])
+    return (f"Model cost: every model renders within {worst['relative_to_lambert']:.2f}x "
+            f"of lambert on this scene (slowest: {worst['name']}); the BSDF is a small "
+            "part of a path-traced sample's cost.")
+
+
+def oren_nayar(rows: list[dict]) -> str:
+    tables = [r for r in rows if r["table_resolution"]]
+    best = max(tables, key=lambda r: r["speedup"])
+    return (f"Oren-Nayar table: best speed-up {best['speedup']:.3f}x (resolution "
+            f"{best['table_resolution']}); relMSE vs exact from "
+            f"{tables[0]['relmse_vs_exact']:.2g} (resolution {tables[0]['table_resolution']}) "
+            f"to {tables[-1]['relmse_vs_exact']:.2g} ({tables[-1]['table_resolution']})."
+            + (" The table buys no measurable time here (< 5 %): on this CPU the "
+               "trigonometry is not the bottleneck." if best["speedup"] < 1.05 else ""))
+
+
+def sampling(rows: list[dict]) -> str:
+    cos = [r for r in rows if r["strategy"] == "cosine"]
+    gains = ", ".join(f"{r['name']} {1 / r['efficiency_vs_first']:.0f}x" for r in cos)
+    return f"Importance sampling vs cosine sampling, efficiency gain: {gains}."
+
+
+def integrators(rows: list[dict]) -> str | None:
+    by_name = {r["name"]: r for r in rows}
+    if "scanline" not in by_name or "path depth 8" not in by_name:
+        return None
+    s, p = by_name["scanline"], by_name["path depth 8"]
+    return (f"Scan-line direct lighting takes {s['median_s'] / p['median_s']:.2f}x the "
+            f"time of path tracing (depth 8) and has {s['relmse'] / p['relmse']:.1f}x its "
+            "relMSE against converged path tracing (it has no indirect light and no "
+            "environment light).")
+
+
+def convergence(rows: list[dict]) -> str:
+    return f"Convergence: relMSE vs spp has log-log slope {rows[0]['slope']:.2f}."
+
+
+def scaling(rows: list[dict]) -> str | None:
+    lights = [r for r in rows if r["axis"] == "lights"]
+    if len(lights) < 2:
+        return None
+    slope = np.polyfit([r["value"] for r in lights], [r["median_s"] for r in lights], 1)[0]
+    return (f"Scan-line cost per extra light: {1e3 * slope:.2f} ms "
+            f"(on {lights[0]['median_s'] * 1e3:.1f} ms for one light).")
+
+
+def lobes(rows: list[dict]) -> str:
+    ratios = ", ".join(f"{r['name']} {r['ratio']:.3f}" for r in rows)
+    verdict = ("within 5 %: a lobe that is off is not traced" if
+               all(r["ratio"] < 1.05 for r in rows) else
+               "above 1.05 somewhere: a dead lobe may still be traced (a bug)")
+    return f"Lobes switched off, time against the model without them: {ratios} ({verdict})."
+
+
+def energy(rows: list[dict]) -> str:
+    ratios = ", ".join(f"{r['name']} {r['ratio']:.2f}x" for r in rows)
+    tables = [r for r in rows if r["table_build_s"] > 0]
+    return (f"Energy compensation, render time on / off: {ratios} (goal <= 1.10: "
+            f"{'met' if all(r['ratio'] <= 1.10 for r in rows) else 'not met'}). "
+            f"Building a table ({tables[0]['table_samples']}² samples per node): "
+            + ", ".join(f"{r['table']} {r['table_build_s']:.2f} s" for r in tables) + ".")
+
+
+def materials(rows: list[dict]) -> str:
+    """Plugin vs built-in at the largest number of materials, and the tracing
+    cost per material (slope of the warm render's tracing time over N)."""
+    most = max(r["materials"] for r in rows)
+    ratios = ", ".join(
+        f"{r['name'].split(' vs ')[0]} {r['warm_ratio']:.2f}x (first render "
+        f"{r['first_ratio']:.2f}x, kernel execution {r['execution_ratio']:.2f}x, frozen replay "
+        f"{r['frozen_ratio']:.2f}x, peak memory "
+        f"{r['plugin_peak_mib']:.0f} vs {r['builtin_peak_mib']:.0f} MiB)"
+        for r in rows if r["materials"] == most)
+    slopes = []
+    for name in dict.fromkeys(r["name"] for r in rows):
+        pair = [r for r in rows if r["name"] == name]
+        if len(pair) > 1:
+            n = [r["materials"] for r in pair]
+            per = [1e3 * np.polyfit(n, [r[f"{side}_tracing_s"] for r in pair], 1)[0]
+                   for side in ("plugin", "builtin")]
+            slopes.append(f"{name} {per[0]:.2f} vs {per[1]:.2f} ms")
+    return (f"{most} spheres, each with its own material: plugin / built-in warm render time "
+            f"{ratios}. Tracing per material (plugin vs built-in): {', '.join(slopes)}.")
+
+
+def frozen(rows: list[dict]) -> str:
+    traced = {r["passes"]: r for r in rows if not r["frozen"]}
+    replayed = {r["passes"]: r for r in rows if r["frozen"]}
+    parts = ", ".join(f"{p} passes {traced[p]['first_vs_1_pass']:.2f}x traced and "
+                      f"{r['first_vs_1_pass']:.2f}x frozen" for p, r in replayed.items())
+    return (f"Rendering in passes ({rows[0]['materials']} cook_torrance materials, "
+            f"{rows[0]['spp']} spp in all, the first render_passes call of a fresh process "
+            f"as in mi-brdfs render), time against one pass: {parts}.")
+
+
+def kernels(rows: list[dict]) -> str:
+    parts = "; ".join(
+        f"{name}: " + ", ".join(f"{r['method']} {r['ratio']:.2f}" for r in rows
+                                if r["name"] == name)
+        for name in dict.fromkeys(r["name"] for r in rows))
+    return (f"BSDF kernels ({rows[0]['lanes']} direction pairs), plugin / built-in kernel "
+            f"execution time: {parts}.")
+
+
+def tracing(rows: list[dict]) -> str:
+    name = rows[0]["name"]
+    r = {row["method"]: row for row in rows if row["name"] == name}
+    return (f"Tracing one call ({name}): sample {r['sample']['plugin_ms']:.3f} ms vs "
+            f"{r['sample']['builtin_ms']:.3f} ms ({r['sample']['ratio']:.1f}x), eval_pdf "
+            f"{r['eval_pdf']['plugin_ms']:.3f} vs {r['eval_pdf']['builtin_ms']:.3f} ms "
+            f"({r['eval_pdf']['ratio']:.1f}x). Tracing a path-traced render calls each "
+            f"instance's sample {r['sample']['render_calls']} and eval_pdf "
+            f"{r['eval_pdf']['render_calls']} times (eval and pdf "
+            f"{r['eval']['render_calls_all']} times); one sample call makes "
+            f"{r['sample']['texture_evals']} texture evaluations and builds "
+            f"{r['sample']['microfacet_objects']} MicrofacetDistribution objects.")
+
+
+def trade(rows: list[dict]) -> str | None:
+    """The best model per material (lowest BRDF error) and the cheapest model
+    within 0.05 of it, with their render cost against the material's plugin."""
+    done = [r for r in rows if not r["failed"]]
+    if not done:
+        return None
+    parts = []
+    for material in dict.fromkeys(r["material"] for r in done):
+        mine = [r for r in done if r["material"] == material]
+        best = min(mine, key=lambda r: r["brdf_error"])
+        close = [r for r in mine if r["brdf_error"] <= best["brdf_error"] + 0.05]
+        cheap = min(close, key=lambda r: r["cost_ratio"])
+        part = f"{material}: {best['model']} ({best['brdf_error']:.3f}, cost {best['cost_ratio']:.2f}x)"
+        if cheap is not best:
+            part += (f", or {cheap['model']} ({cheap['brdf_error']:.3f}, "
+                     f"cost {cheap['cost_ratio']:.2f}x)")
+        parts.append(part)
+    return ("Which model for which material (BRDF error, 0 = identical, 1 = black; render "
+            "cost against the material's own plugin): " + "; ".join(parts) + ". The fit "
+            "report with every model's error, renders and XML is in trade/index.html.")
+
+
+# ----------------------------------------------------------------------------
+#  The files
+# ----------------------------------------------------------------------------
+
+def _fmt(v) -> str:
+    if isinstance(v, float):
+        return f"{v:.4g}"
+    return str(v)
+
+
+def write_csv(path: str, results: dict) -> None:
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["group", "row", "key", "value"])
+        for group, rows in results["groups"].items():
+            for i, row in enumerate(rows):
+                for k, v in row.items():
+                    if not isinstance(v, list):
+                        w.writerow([group, i, k, v])
+
+
+def markdown(results: dict, about: dict[str, str]) -> str:
+    """README.md: the run, the findings (or the smoke-test notice), and per
+    group what it measures (``about``), its table and its plots."""
+    lines = ["# mi-brdfs bench results", "",
+             f"{results['settings_name']} run, {results['seconds']:.0f} s ("
+             + ", ".join(f"{g} {t:.0f} s" for g, t in results.get("group_seconds", {}).items())
+             + "). Machine: "
+             + ", ".join(f"{k} {v}" for k, v in results["machine"].items()) + ".", ""]
+    if results["smoke_test"]:
+        lines += [f"**{SMOKE_TEST}**", ""]
+    lines += ["Timings are medians of repeated renders after a warm-up (compile) render, "
+              "in one process (materials, frozen, kernels, tracing: in processes of their own, "
+              "as Dr.Jit traces every BSDF instance alive in the process); errors are relative "
+              "MSE against a converged reference.", ""]
+    if not results["smoke_test"]:
+        lines += ["## Findings", "", *(f"- {line}" for line in results["findings"]), ""]
+    for group, rows in results["groups"].items():
+        if not rows:
+            continue
+        keys = [k for k in rows[0] if not isinstance(rows[0][k], list)]
+        lines += [f"## {group}", ""]
+        if about.get(group):
+            lines += [about[group], ""]
+        lines += ["| " + " | ".join(keys) + " |", "|" + "---|" * len(keys)]
+        lines += ["| " + " | ".join(_fmt(r[k]) for k in keys) + " |" for r in rows]
+        lines += ["", *(f"![{p}]({p})" for p in results["plots"].get(group, [])), ""]
+    return "\n".join(lines)
+
+
+def write(out_dir: str, results: dict, about: dict[str, str]) -> None:
+    """results.json, results.csv and README.md in ``out_dir`` (the report's
+    temporary folder: outputs.report_dir moves it into place when complete)."""
+    with open(os.path.join(out_dir, "results.json"), "w") as f:
+        json.dump(results, f, indent=1)
+    write_csv(os.path.join(out_dir, "results.csv"), results)
+    with open(os.path.join(out_dir, "README.md"), "w") as f:
+        f.write(markdown(results, about))

@@ -1,0 +1,152 @@
+"""One plugin registry (``mi_brdfs.bsdfs.PLUGINS``) and what derives from it:
+the package's exports, the plugins Mitsuba loads by name, the catalog's
+entries, the lobe plots, the bench's models, the transcription tests, the
+bundled scenes and their renders. A model
+added to the registry alone appears everywhere or fails here, saying where it
+is missing. And the declarations every model is built from (``Param``,
+``Option``) are checked when its class is defined.
+"""
+import os
+import subprocess
+import sys
+from pathlib import Path
+from xml.etree import ElementTree
+
+import mitsuba as mi
+import pytest
+
+import mi_brdfs
+from mi_brdfs.bsdfs import BY_NAME, PLUGINS
+from mi_brdfs.bsdfs.base import BRDF, DeclarationError, Option, Param
+from mi_brdfs import scenes
+from mi_brdfs.tools import catalog
+
+TESTS = Path(__file__).parent
+RENDERS = TESTS.parent.parent / "scenes" / "renders"
+NAMES = [cls.name for cls in PLUGINS]
+
+
+def test_names_are_unique():
+    assert len(set(NAMES)) == len(NAMES) == len(BY_NAME)
+    assert len({cls.__name__ for cls in PLUGINS}) == len(PLUGINS)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_every_plugin_is_everywhere(name):
+    cls = BY_NAME[name]
+    assert getattr(mi_brdfs, cls.__name__) is cls, "not exported by mi_brdfs"
+    assert cls.__name__ in mi_brdfs.__all__
+    assert type(mi.load_dict({"type": name})).__name__ == cls.__name__, "not registered"
+    assert isinstance(catalog.entry(name), catalog.Entry)
+    assert catalog.LOBES[name]["type"] == name, "no lobe plot"
+    assert name in catalog.FURNACE and name in catalog.report_chi2(), "not in the validation report"
+    assert any(c["type"] == name for _, c in catalog.bench_models()), "not in bench's models"
+    if cls.compensable:
+        assert any(c["type"] == name for _, c in catalog.BENCH_ENERGY), \
+            "compensable, but not in catalog.BENCH_ENERGY"
+    assert (TESTS / f"test_{name}.py").is_file(), \
+        f"no lecture-transcription test tests/bsdfs/test_{name}.py (CONTRIBUTING.md)"
+    assert scenes.path(name) is not None, f"no bundled scene scenes/{name}.xml"
+    for mode in ("scanline", "hdr"):
+        assert (RENDERS / f"{name}_{mode}.png").is_file(), \
+            f"no render scenes/renders/{name}_{mode}.png (sh scenes/renders/make.sh)"
+
+
+def test_the_catalog_has_entries_for_registered_plugins_only():
+    assert list(catalog.ENTRIES) == NAMES
+    assert set(catalog.BUILDERS) <= set(NAMES), "an entry for a plugin that is not registered"
+
+
+def test_a_plugin_without_an_entry_is_named():
+    with pytest.raises(LookupError, match="plugin 'nonesuch' has no catalog entry: add a "
+                                          r"function @builds\('nonesuch'\)"):
+        catalog.entry("nonesuch")
+
+
+# ----------------------------------------------------------------------------
+#  Declarations, checked when the class is defined
+# ----------------------------------------------------------------------------
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"kind": "scaler"}, "kind 'scaler' is unknown; valid: spectrum, scalar, float"),
+    ({"role": "color"}, "role 'color' is unknown; valid: colour, weight, shape"),
+    ({"default": -0.5}, r"default -0.5 is outside its range \[0, inf\]"),
+    ({"default": 2.0, "hi": 1.0}, r"default 2.0 is outside its range \[0, 1\]"),
+    ({"default": float("nan")}, "default nan is outside"),
+    ({"default": "0.5"}, "default '0.5' is outside"),
+    ({"lo": 1.0, "hi": 1.0, "default": 1.0}, r"empty range \[1, 1\]"),
+    ({"hi": 1.0, "upper": 2.0}, r"upper 2.0 is outside its range \[0, 1\]"),
+])
+def test_a_malformed_param_is_refused(kwargs, message):
+    with pytest.raises(DeclarationError, match="Param 'x': " + message):
+        Param("x", **{"default": 0.5, **kwargs})
+
+
+@pytest.mark.parametrize("default, choices, message", [
+    ("ggx", ("beckmann", "blinn"), "default 'ggx' is not one of its choices"),
+    ("a", (), "choices must be a tuple of strings"),
+    ("a", ["a", "b"], "choices must be a tuple of strings"),
+    (True, ("a",), "a boolean has no choices"),
+])
+def test_a_malformed_option_is_refused(default, choices, message):
+    with pytest.raises(DeclarationError, match="Option 'x': " + message):
+        Option("x", default, choices)
+
+
+def test_a_model_declaring_a_name_twice_is_refused():
+    with pytest.raises(DeclarationError, match="Twice: 'mode' is declared twice"):
+        type("Twice", (BRDF,), {"name": "twice", "PARAMS": (Param("mode", 0.5),)})
+    with pytest.raises(DeclarationError, match=r"Loose.PARAMS: \('a', 0.5\) is not a Param"):
+        type("Loose", (BRDF,), {"name": "loose", "PARAMS": (("a", 0.5),)})
+
+
+# ----------------------------------------------------------------------------
+#  A broken catalog entry fails its own model's tests only
+# ----------------------------------------------------------------------------
+
+BREAKER = '''"""A pytest plugin (-p breaker), loaded before collection: breaks lambert's
+catalog entry (its builder raises) and one of phong's configurations (a
+misspelt parameter, which Mitsuba refuses at load time)."""
+from mi_brdfs.tools import catalog
+
+@catalog.builds("lambert")
+def no_entry(name):
+    raise KeyError("a misspelt key in the entry")
+
+@catalog.builds("phong")
+def misspelt(name, build=catalog.BUILDERS["phong"]):
+    entry = build(name)
+    entry.interior.append({"type": name, "exponant": 20.0})
+    return entry
+'''
+
+
+def test_a_broken_entry_fails_its_own_tests_only(tmp_path):
+    """The battery, collected with lambert's entry and a phong configuration
+    broken: no collection error; lambert's and phong's tests fail (those that
+    use what is broken), every other model's pass."""
+    (tmp_path / "breaker.py").write_text(BREAKER)
+    report = tmp_path / "report.xml"
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        [str(tmp_path), *filter(None, [os.environ.get("PYTHONPATH")])])}
+    run = subprocess.run(
+        [sys.executable, "-m", "pytest", "-q", "-p", "breaker", "-p", "no:cacheprovider",
+         f"--junitxml={report}", str(TESTS / "test_battery.py"),
+         "-k", "catalog_covers or update_matches or traverse_exposes or lambert"],
+        capture_output=True, text=True, env=env, cwd=TESTS.parent.parent, timeout=600)
+    assert run.returncode == 1, run.stdout[-3000:] + run.stderr[-3000:]   # 1: tests failed
+    cases = ElementTree.parse(report).getroot().iter("testcase")
+    failed, passed = set(), set()
+    for case in cases:
+        name = case.get("name")
+        if case.find("error") is not None:
+            pytest.fail(f"{name}: an error, not a failure")
+        (failed if case.find("failure") is not None else passed).add(name)
+    assert all("lambert" in n or "exponant" in n for n in failed), sorted(failed)
+    entry_cases = {n for n in failed | passed if "lambert-entry" in n}
+    assert entry_cases and entry_cases <= failed
+    assert "test_catalog_covers_the_plugin[lambert]" in failed
+    assert any("exponant" in n for n in failed)
+    others = {n for n in passed if not ("lambert" in n or "exponant" in n)}
+    assert {n.split("[")[1].split("-")[0] for n in others if "[" in n} >= set(NAMES) - {"lambert"}
+    assert any(n.startswith("test_load_eval_pdf_sample[lambert") for n in passed)  # its class

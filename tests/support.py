@@ -7,6 +7,7 @@ hide an error elsewhere.
 """
 from __future__ import annotations
 
+import contextlib
 import math
 
 import numpy as np
@@ -610,3 +611,23 @@ def finite_difference(make, x: float, h: float, side: str = "central") -> float:
     if side == "backward":
         return (make(x) - make(x - h)) / h
     return (make(x + h) - make(x - h)) / (2 * h)
+
+
+# ----------------------------------------------------------------------------
+#  Variants
+# ----------------------------------------------------------------------------
+
+
+@contextlib.contextmanager
+def active_variant(name: str):
+    """Run the block in Mitsuba variant ``name`` with every plugin registered
+    for it, then return to the previous variant and Dr.Jit's default flags
+    (as Mitsuba's own variant fixtures do, without flushing the kernel cache)."""
+    previous = mi.variant()
+    mi.set_variant(name)
+    mi_brdfs.register()
+    try:
+        yield name
+    finally:
+        dr.set_flag(dr.JitFlag.Default, True)
+        mi.set_variant(previous)

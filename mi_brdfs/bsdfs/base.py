@@ -52,6 +52,7 @@ A model subclasses :class:`BRDF` and supplies:
     estimates of each lobe's albedo (weights included), for lobe selection;
 ``sample_specular(inp, si, sample2)``, ``pdf_specular(inp, si, wo)``
     the glossy lobe's sampler and its density;
+
 and, if ``compensable``: ``ms_colour(inp)`` and either ``albedo_spec()`` and
 ``table_parameters(inp)`` (a tabulated albedo, :mod:`.energy`) or
 ``albedo(inp, v)`` and ``albedo_average(inp)`` (an analytic one).
@@ -105,8 +106,11 @@ class Param:
     traverse key is the bare name). ``role``: ``"colour"`` and ``"weight"`` scale a lobe
     (their gradients are checked at their bounds too), ``"shape"`` shapes it.
     ``upper`` is the upper end of the range the tests probe when ``hi`` is
-    unbounded (colours: 1, a white surface). Checked when declared: a known
-    kind and role, lo <= default <= hi (DeclarationError otherwise).
+    unbounded (colours: 1, a white surface). ``doc`` is its meaning, in the
+    plugin's generated parameter table (:func:`parameter_table`); an
+    ``optional`` parameter is read only when given (it has no default).
+    Checked when declared: a known kind and role, lo <= default <= hi
+    (DeclarationError otherwise).
     """
     name: str
     default: float
@@ -115,6 +119,8 @@ class Param:
     kind: str = "spectrum"
     role: str = "colour"
     upper: float | None = None
+    doc: str = ""
+    optional: bool = False
 
     KINDS = ("spectrum", "scalar", "float")
     ROLES = ("colour", "weight", "shape")
@@ -153,18 +159,28 @@ class Param:
 
 @dataclass(frozen=True)
 class Option:
-    """A non-differentiable choice: one of ``choices`` (strings), or a boolean
-    when ``default`` is a bool. Read at load time into ``self.<name>``.
-    Checked when declared: the default is one of the choices, or a bool
-    without choices (DeclarationError otherwise)."""
+    """A non-differentiable choice: one of ``choices`` (strings), a boolean
+    when ``default`` is a bool, or an integer in [``lo``, ``hi``] when it is an
+    int. Read at load time into ``self.<name>``; ``doc`` is its meaning, in
+    the generated parameter table. Checked when declared: the default is one
+    of the choices, a bool without choices, or an int within its range
+    (DeclarationError otherwise)."""
     name: str
-    default: str | bool
+    default: str | bool | int
     choices: tuple[str, ...] = ()
+    doc: str = ""
+    lo: int | None = None
+    hi: int | None = None
 
     def __post_init__(self):
         if isinstance(self.default, bool):
             if self.choices:
                 raise DeclarationError(f"Option {self.name!r}: a boolean has no choices")
+        elif isinstance(self.default, int):
+            if self.choices or self.lo is None or self.hi is None \
+                    or not self.lo <= self.default <= self.hi:
+                raise DeclarationError(f"Option {self.name!r}: an integer needs lo <= default "
+                                       f"<= hi and no choices")
         elif not (isinstance(self.choices, tuple) and self.choices
                   and all(isinstance(c, str) for c in self.choices)):
             raise DeclarationError(f"Option {self.name!r}: choices must be a tuple of strings, "
@@ -176,11 +192,85 @@ class Option:
     def valid(self) -> str:
         if isinstance(self.default, bool):
             return "true or false (a <boolean>)"
+        if isinstance(self.default, int):
+            return f"an integer in [{self.lo}, {self.hi}] (an <integer>)"
         return "one of " + ", ".join(f'"{c}"' for c in self.choices) + " (a <string>)"
 
 
 def _fmt(x: float | None, none: str) -> str:
     return none if x is None else f"{x:g}"
+
+
+# ----------------------------------------------------------------------------
+#  The generated parameter table of each plugin's documentation
+# ----------------------------------------------------------------------------
+
+PARAMETERS = ".. parameters::"     # the line of a model's docstring that becomes its table
+FORMS = {"spectrum": "float, rgb, spectrum or texture", "scalar": "float or texture",
+         "float": "float"}
+BASE_DOCS = {               # the options every plugin has, documented once
+    "mode": '``"hdr"``: physically normalised and unclamped, for path tracing; '
+            '``"scanline"``: the lecture\'s scan-line formulas, each lobe clamped per '
+            'colour channel to [0, 1] (not energy conserving, on purpose).',
+    "sampling": '``"lobe"``: each lobe importance-sampled by its own sampler (below); '
+                '``"cosine"``: every lobe from the cosine hemisphere, to measure what '
+                'importance sampling gains (``mi-brdfs bench``), not for rendering.',
+    "energy_compensation": 'hdr only (with ``mode="scanline"`` a load-time error): adds '
+                           'the multiple-scattering lobe of :mod:`mi_brdfs.bsdfs.energy`, '
+                           'which returns the light a single-scattering lobe loses; see '
+                           '*Energy compensation* below.',
+}
+
+
+def _range(lo, hi) -> str:
+    if lo is not None and hi is not None:
+        return f" in [{lo:g}, {hi:g}]"
+    if lo is not None:
+        return f" >= {lo:g}"
+    return f" <= {hi:g}" if hi is not None else ""
+
+
+def _row(name: str, kind: str, doc: str, default: str) -> list[str]:
+    import textwrap
+    lines = textwrap.wrap(" ".join(doc.split()), 66) or [""]
+    return [f"   * - ``{name}``", f"     - {kind}", f"     - {lines[0]}",
+            *(f"       {line}" for line in lines[1:]), f"     - {default}"]
+
+
+def parameter_table(cls) -> str:
+    """The reStructuredText table of a plugin's parameters and options, made
+    from its declarations (``PARAMS``, ``OPTIONS`` and the base's options):
+    the one source of the plugin's parameter documentation."""
+    rows = [".. list-table::", "   :header-rows: 1", "   :widths: 20 20 50 10", "",
+            "   * - Parameter", "     - Type", "     - Description", "     - Default"]
+    for p in cls.PARAMS:
+        kind = FORMS[p.kind] + _range(p.lo, p.hi) + " (∂)"
+        rows += _row(p.name, kind, p.doc, "none" if p.optional else f"{p.default:g}")
+    for o in cls.OPTIONS + tuple(o for o in cls.options() if o not in cls.OPTIONS):
+        doc = o.doc or BASE_DOCS[o.name]
+        if isinstance(o.default, bool):
+            kind, default = "boolean", str(o.default).lower()
+        elif isinstance(o.default, int):
+            kind, default = "integer" + _range(o.lo, o.hi), str(o.default)
+        else:
+            kind, default = "string", f'``"{o.default}"``'
+            doc += " One of " + ", ".join(f'``"{c}"``' for c in o.choices) + "."
+        rows += _row(o.name, kind, doc, default)
+    return "\n".join(rows)
+
+
+def document(cls) -> None:
+    """Put the generated parameter table into the docstring of ``cls``'s module
+    (at its ``.. parameters::`` line) and make that docstring the class's, so
+    that ``help()``, the documentation site and the code cannot disagree."""
+    import sys
+    module = sys.modules.get(cls.__module__)
+    doc = getattr(module, "__doc__", None) or ""
+    if PARAMETERS in doc:
+        doc = doc.replace(PARAMETERS, parameter_table(cls))
+        module.__doc__ = doc
+    if doc:
+        cls.__doc__ = doc
 
 
 class Shown:
@@ -395,6 +485,10 @@ class Reader:
             if kind != T.Bool:
                 raise self.error(o.name, value, o.valid())
             return value
+        if isinstance(o.default, int):
+            if kind != T.Integer or not o.lo <= value <= o.hi:
+                raise self.error(o.name, value, o.valid())
+            return value
         if kind != T.String or value not in o.choices:
             raise self.error(o.name, value, o.valid())
         return value
@@ -561,6 +655,7 @@ class BRDF:
         for name in names:
             if names.count(name) > 1:
                 raise DeclarationError(f"{cls.__name__}: {name!r} is declared twice")
+        document(cls)
         # Options and the base's state as properties: read at every traced call,
         # ~0.05 us each (attrgetter, in C) against ~0.5 us through __getattr__.
         for name in STATE + tuple(o.name for o in cls.options()):

@@ -2,44 +2,7 @@
 ``blinn`` — Lambert diffuse + Blinn(-Phong) specular reflection
 ================================================================
 
-.. list-table::
-   :header-rows: 1
-
-   * - Parameter
-     - Type
-     - Description
-     - Default
-   * - ``diffuse_reflectance``
-     - float, rgb, spectrum or texture (∂)
-     - m_D, the diffuse colour, >= 0 (above 1 allowed: scanline mode clamps).
-     - 0.5
-   * - ``specular_reflectance``
-     - float, rgb, spectrum or texture (∂)
-     - m_S, the specular colour, >= 0. With the default m_D + m_S = 1 the hdr
-       model reflects at most all the light it receives.
-     - 0.5
-   * - ``exponent``
-     - float or texture in [0, 1e8] (∂)
-     - gamma, the specular power (the lecture: "one or two hundreds" in
-       practice). A Blinn lobe is wider than a Phong lobe of the same gamma
-       (about 4x the exponent gives a similar highlight). gamma = 0 makes the
-       hdr model exactly Lambertian. The lobe is evaluated and sampled to ~1e-6
-       at any gamma (:mod:`mi_brdfs.bsdfs.powercos`); the bound ``phong.MAX_EXPONENT`` = 1e8
-       keeps it well above the spacing of float32 directions (~1e-7).
-     - 100
-   * - ``energy_compensation``
-     - boolean
-     - hdr only (with ``mode="scanline"`` a load-time error): adds the
-       reciprocal multiple-scattering lobe of Kulla & Conty 2017 /
-       Turquin 2019 (:mod:`mi_brdfs.bsdfs.energy`), so that a white lobe
-       (m_S = 1) reflects 1 at every incident angle. Per-bounce colour
-       m_S. E(μ, γ) is tabulated from the hdr lobe above over cos θ and
-       log(1 + γ), γ in [0, 1e8].
-     - false
-   * - ``mode``
-     - string
-     - ``"hdr"`` (radiometric, unclamped) or ``"scanline"`` (the lecture's formula).
-     - ``"hdr"``
+.. parameters::
 
 With w_r the viewer (``si.wi``), d the light (``wo``), n the normal and the
 half vector h = normalize(d + w_r), ``eval`` returns::
@@ -81,6 +44,9 @@ against the diffuse one: m_S vs m_D in hdr mode,
 8 (1 - 2^(-(gamma+2)/2))/(gamma + 2) · m_S vs m_D in scanline mode (channel
 means). With m_D = 0 there is no diffuse lobe, with m_S = 0 no specular one.
 
+**Energy compensation** (``energy_compensation``): as Phong's
+(:mod:`mi_brdfs.bsdfs.phong`), with E(μ, γ) tabulated from Blinn's own hdr lobe.
+
 .. code-block:: xml
 
     <bsdf type="blinn">
@@ -91,6 +57,8 @@ means). With m_D = 0 there is no diffuse lobe, with m_S = 0 no specular one.
     </bsdf>
 """
 from __future__ import annotations
+
+from dataclasses import replace
 
 import drjit as dr
 import mitsuba as mi
@@ -158,8 +126,15 @@ def pdf_lobe(wi, wo, gamma):
 # ----------------------------------------------------------------------------
 
 class Blinn(Phong):
-    """Phong's plugin glue (parameters, lobes, sampling) with Blinn's formulas."""
+    # Phong's plugin glue (parameters, lobes, sampling) with Blinn's formulas.
     name = "blinn"
+    PARAMS = Phong.PARAMS[:2] + (replace(
+        Phong.PARAMS[2], doc="γ, the specular power (the lecture: \"one or two hundreds\" in "
+        "practice). A Blinn lobe is wider than a Phong lobe of the same γ (about 4x the "
+        "exponent gives a similar highlight). γ = 0 makes the hdr model exactly Lambertian. "
+        "The lobe is evaluated and sampled to ~1e-6 at any γ (:mod:`mi_brdfs.bsdfs.powercos`); "
+        "the bound ``phong.MAX_EXPONENT`` = 1e8 keeps it well above the spacing of float32 "
+        "directions (~1e-7)."),)
     specular_scanline = staticmethod(specular_scanline)
     specular_hdr = staticmethod(specular_hdr)
     specular_weight = staticmethod(specular_weight)

@@ -2,72 +2,7 @@
 ``cook_torrance`` — Cook-Torrance: Lambert diffuse + microfacet specular
 =========================================================================
 
-.. list-table::
-   :header-rows: 1
-
-   * - Parameter
-     - Type
-     - Description
-     - Default
-   * - ``diffuse_reflectance``
-     - float, rgb, spectrum or texture (∂)
-     - m_D, >= 0 (above 1 allowed: scanline mode clamps).
-     - 0.5
-   * - ``specular_reflectance``
-     - float, rgb, spectrum or texture (∂)
-     - m_S, >= 0.
-     - 1.0
-   * - ``k``
-     - float in [0, 1] (∂)
-     - weight of the diffuse lobe; the specular lobe gets 1 - k.
-     - 0.5
-   * - ``f0``
-     - float in [0, 1] (∂)
-     - F_0 of Schlick's Fresnel approximation.
-     - 0.04
-   * - ``alpha``
-     - float or texture >= 0 (∂)
-     - the lecture's roughness rho (<= 1 for ``blinn``); values below
-       ``ALPHA_MIN`` = 1e-4 (including 0, the perfectly smooth surface) are
-       clamped to it, as Mitsuba and pbrt do.
-     - 0.3
-   * - ``distribution``
-     - string
-     - D: ``"blinn"``, ``"beckmann"`` or ``"ggx"``.
-     - ``"beckmann"``
-   * - ``geometry``
-     - string
-     - G: ``"cook_torrance"`` (the lecture's V-cavity term) or ``"smith"``
-       (G1(w_r)·G1(d): the lecture's g_GGX for ggx, the exact Smith Beckmann
-       G1 for beckmann, and for blinn the Smith G1 of the Blinn distribution
-       itself, tabulated: see :mod:`mi_brdfs.bsdfs.microfacet`).
-     - ``"cook_torrance"``
-   * - ``sample_visible``
-     - bool
-     - Beckmann and GGX: sample the visible normals (else the full
-       distribution D(m)·cos(theta_m)); Blinn always samples the latter.
-     - true
-   * - ``energy_compensation``
-     - boolean
-     - hdr only (with ``mode="scanline"`` a load-time error): adds the
-       reciprocal multiple-scattering lobe of Kulla & Conty 2017 /
-       Turquin 2019 (:mod:`mi_brdfs.bsdfs.energy`), so that a white
-       surface (F0 = 1, m_S = 1; and m_D = 1 if k > 0) reflects 1 at
-       every incident angle. Per-bounce colour m_S·F_avg (F_avg the
-       cosine-weighted average of Schlick's F), so coloured conductors
-       saturate instead of greying; with k > 0 the albedo is k·m_D + (1
-       - k)·(the compensated specular). E(μ, α) is tabulated per D × G
-       with F = 1.
-     - false
-   * - ``mode``
-     - string
-     - ``"hdr"`` or ``"scanline"``.
-     - ``"hdr"``
-   * - ``sampling``
-     - string
-     - ``"lobe"`` (the importance sampling below) or ``"cosine"`` (every
-       lobe from the cosine hemisphere; for benchmarks).
-     - ``"lobe"``
+.. parameters::
 
 With w_r the viewer (``si.wi``), d the light (``wo``), h = normalize(d + w_r),
 and D, G, F as in :mod:`mi_brdfs.bsdfs.microfacet`, ``eval`` returns::
@@ -86,6 +21,15 @@ D(m)·cos(theta_m) for Blinn; the lobe is picked in proportion to
 k·mean(m_D) (pi·k·mean(m_D) in scanline mode, whose Lambert term has no 1/pi)
 vs (1 - k)·mean(m_S)·Schlick(w_r·n). With k = 0 (or m_D = 0) there
 is no diffuse lobe, with k = 1 (or m_S = 0) no specular one.
+
+**Energy compensation** (``energy_compensation``): the reciprocal
+multiple-scattering lobe of Kulla & Conty 2017 / Turquin 2019
+(:mod:`mi_brdfs.bsdfs.energy`) returns the light that bounces between the
+facets, so that a white surface (F0 = 1, m_S = 1; and m_D = 1 if k > 0)
+reflects 1 at every incident angle. Per-bounce colour m_S·F_avg (F_avg the
+cosine-weighted average of Schlick's F), so coloured conductors saturate
+instead of greying; with k > 0 the albedo is k·m_D + (1 - k)·(the
+compensated specular). E(μ, α) is tabulated per D × G with F = 1.
 
 .. code-block:: xml
 
@@ -203,15 +147,29 @@ def spec(distribution: str, geometry: str) -> energy.AlbedoSpec:
 class CookTorrance(BRDF):
     name = "cook_torrance"
     compensable = True
-    OPTIONS = (Option("distribution", "beckmann", mf.DISTRIBUTIONS),
-               Option("geometry", "cook_torrance", mf.GEOMETRIES),
-               Option("sample_visible", True))
+    OPTIONS = (
+        Option("distribution", "beckmann", mf.DISTRIBUTIONS, doc="D, the distribution term."),
+        Option("geometry", "cook_torrance", mf.GEOMETRIES,
+               doc='G: ``"cook_torrance"`` is the lecture\'s microfacet (V-cavity) term, '
+                   '``"smith"`` G1(ω_r)·G1(d): the lecture\'s g_GGX for ggx, the exact Smith '
+                   "Beckmann G1 for beckmann, and for blinn the Smith G1 of the Blinn "
+                   "distribution itself, tabulated (:mod:`mi_brdfs.bsdfs.microfacet`)."),
+        Option("sample_visible", True,
+               doc="Beckmann and GGX: sample the visible normals (else the full distribution "
+                   "D(m)·cos θ_m); Blinn always samples the latter."),
+    )
     PARAMS = (
-        Param("diffuse_reflectance", 0.5),                                   # m_D
-        Param("specular_reflectance", 1.0),                                  # m_S
-        Param("k", 0.5, 0.0, 1.0, kind="float", role="weight"),              # diffuse weight
-        Param("f0", 0.04, 0.0, 1.0, kind="float", role="weight"),            # Schlick's F_0
-        Param("alpha", 0.3, 0.0, None, kind="scalar", role="shape", upper=1.0),  # rho
+        Param("diffuse_reflectance", 0.5, doc="m_D; above 1 allowed (scanline mode clamps)."),
+        Param("specular_reflectance", 1.0, doc="m_S, a factor on the specular lobe (as "
+              "Mitsuba's ``specular_reflectance``); the Fresnel term is the reflectance."),
+        Param("k", 0.5, 0.0, 1.0, kind="float", role="weight",
+              doc="the weight of the diffuse lobe; the specular lobe gets 1 - k."),
+        Param("f0", 0.04, 0.0, 1.0, kind="float", role="weight",
+              doc="F_0 of Schlick's Fresnel approximation."),
+        Param("alpha", 0.3, 0.0, None, kind="scalar", role="shape", upper=1.0,
+              doc="the lecture's roughness ρ (<= 1 for ``blinn``); values below "
+                  "``ALPHA_MIN`` = 1e-4 (0, the perfectly smooth surface, included) are "
+                  "clamped to it, as Mitsuba and pbrt do."),
     )
 
     def read(self, reader: Reader) -> None:

@@ -2,22 +2,7 @@
 ``lambert`` — Lambert diffuse reflection
 =========================================
 
-.. list-table::
-   :header-rows: 1
-
-   * - Parameter
-     - Type
-     - Description
-     - Default
-   * - ``reflectance``
-     - float, rgb, spectrum or texture (∂)
-     - m_D, the diffuse colour. Must be >= 0; values above 1 are allowed
-       (scanline mode clamps the lobe to [0, 1]).
-     - 0.5
-   * - ``mode``
-     - string
-     - ``"hdr"`` (radiometric, unclamped) or ``"scanline"`` (the lecture's formula).
-     - ``"hdr"``
+.. parameters::
 
 The lecture's BRDF for scan-line rendering, with d the light direction (``wo``)
 and n the normal, returned as is by ``eval`` (it carries the cosine already)::
@@ -72,7 +57,8 @@ def albedo(m_d, mode: str):
 
 class Lambert(BRDF):
     name = "lambert"
-    PARAMS = (Param("reflectance", 0.5),)                   # m_D
+    PARAMS = (Param("reflectance", 0.5, doc="m_D, the diffuse colour; above 1 allowed "
+                    "(scanline mode clamps the lobe to [0, 1])."),)
 
     def has_diffuse(self) -> bool:
         return not self.off("reflectance")

@@ -28,7 +28,7 @@ normal, and the roughness rho (called ``alpha`` in the plugins)::
 Scale-safe: every function is exact, finite and NaN-free, values and
 gradients, for directions down to cos θ = 1e-30 and exactly 0 and for
 ``alpha >= ALPHA_MIN``. The half vector is normalised after dividing by its
-largest component (|wi + wo|² underflows below cos θ ~ 1e-19), and the Smith
+largest component (``|wi + wo|²`` underflows below cos θ ~ 1e-19), and the Smith
 forms are written as ratios that need no tan² or 1/cos (G1 -> 0 at grazing).
 """
 from __future__ import annotations

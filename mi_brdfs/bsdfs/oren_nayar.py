@@ -2,50 +2,7 @@
 ``oren_nayar`` — Oren-Nayar rough diffuse reflection
 ====================================================
 
-.. list-table::
-   :header-rows: 1
-
-   * - Parameter
-     - Type
-     - Description
-     - Default
-   * - ``reflectance``
-     - float, rgb, spectrum or texture (∂)
-     - m_D, the diffuse colour. Must be >= 0; values above 1 are allowed
-       (scanline mode clamps the result to [0, 1]).
-     - 0.5
-   * - ``sigma``
-     - float or texture in [0, pi/2] (∂)
-     - σ, the roughness in radians (the standard deviation of the facet
-       slope angle). σ = 0 is Lambert, exactly.
-     - 0.3
-   * - ``method``
-     - string
-     - ``"exact"``: the lecture's formulas (acos, sin, tan) at every
-       evaluation; ``"table"``: the lecture's faster variant, sin α·tan β
-       looked up in a 2-D table over (d·n, ω_r·n), bilinearly interpolated.
-     - ``"exact"``
-   * - ``table_resolution``
-     - integer in [2, 4096]
-     - nodes per axis of the table (``method="table"`` only; built once, at
-       load time).
-     - 64
-   * - ``energy_compensation``
-     - boolean
-     - hdr only (with ``mode="scanline"`` a load-time error; ``method="exact"``
-       only): the energy-preserving Oren-Nayar model EON (Portsmouth,
-       Kutz & Hill, JCGT 2025): Fujii's Oren-Nayar (FON) plus its
-       analytic multiple-scattering lobe, the diffuse lobe of OpenPBR,
-       MaterialX and Cycles; a white surface reflects 1 at every angle.
-       Its roughness is r = B(σ)/A(σ) (the lecture's A, B: the ratio of
-       the retro-reflective term to the Lambertian one, Fujii's mixing
-       ratio), so σ in [0, π/2] maps to r in [0, 0.776] and σ = 0 stays
-       Lambert. Per-bounce colour m_D.
-     - false
-   * - ``mode``
-     - string
-     - ``"hdr"`` (radiometric, unclamped) or ``"scanline"`` (the lecture's formula).
-     - ``"hdr"``
+.. parameters::
 
 With d the light (``wo``), ω_r the viewer (``si.wi``) and n the normal, the
 lecture's model::
@@ -78,7 +35,7 @@ small σ at grazing incidence the qualitative model slightly exceeds 1 (about
 ``method="table"``. As the lecture suggests, the σ-dependent factors stay
 analytic (A and B, so σ may be a texture and may change without rebuilding)
 and only the geometric factor T(p, q) = sin α tan β, a function of p = d·n and
-q = ω_r·n alone, is tabulated on a uniform ``table_resolution``² grid over
+q = ω_r·n alone, is tabulated on a uniform ``table_resolution`` × ``table_resolution`` grid over
 [0, 1]² and bilinearly interpolated::
 
     f_r = m_D/π · (A + B G T~(d·n, ω_r·n))          (hdr; scanline likewise)
@@ -96,6 +53,15 @@ sqrt(1-p²)·sqrt(1-q²)/max(p, q) without acos; it is the lecture's GPU trick.)
 
 Sampling: cosine hemisphere (the base's diffuse lobe). With ``reflectance`` 0
 the plugin has no lobe. A viewer or light below the surface gets no reflection.
+
+**Energy compensation** (``energy_compensation``, ``method="exact"`` only):
+the energy-preserving Oren-Nayar model EON (Portsmouth, Kutz & Hill, JCGT
+2025): Fujii's Oren-Nayar (FON) plus its analytic multiple-scattering lobe,
+the diffuse lobe of OpenPBR, MaterialX and Cycles; a white surface reflects 1
+at every angle. Its roughness is r = B(σ)/A(σ) (the lecture's A, B: the ratio
+of the retro-reflective term to the Lambertian one, Fujii's mixing ratio), so
+σ in [0, π/2] maps to r in [0, 0.776] and σ = 0 stays Lambert. Per-bounce
+colour m_D.
 
 .. code-block:: xml
 
@@ -236,13 +202,25 @@ class OrenNayar(BRDF):
     name = "oren_nayar"
     compensable = True
     compensates = "diffuse"
-    OPTIONS = (Option("method", "exact", METHODS),)
-    PARAMS = (Param("reflectance", 0.5),                                          # m_D
-              Param("sigma", 0.3, 0.0, SIGMA_MAX, kind="scalar", role="shape"))   # σ
+    OPTIONS = (
+        Option("method", "exact", METHODS,
+               doc='``"exact"``: the lecture\'s formulas (acos, sin, tan) at every evaluation; '
+                   '``"table"``: the lecture\'s faster variant, sin α·tan β looked up in a 2-D '
+                   "table over (d·n, ω_r·n), bilinearly interpolated."),
+        Option("table_resolution", TABLE_DEFAULT, lo=TABLE_MIN, hi=TABLE_MAX,
+               doc='nodes per axis of the table (``method="table"`` only; built once, at '
+                   "load time)."),
+    )
+    PARAMS = (
+        Param("reflectance", 0.5, doc="m_D, the diffuse colour; above 1 allowed (scanline "
+              "mode clamps the result to [0, 1])."),
+        Param("sigma", 0.3, 0.0, SIGMA_MAX, kind="scalar", role="shape",
+              doc="σ, the roughness in radians (the standard deviation of the facet slope "
+                  "angle), up to π/2. σ = 0 is Lambert, exactly."),
+    )
 
     def read(self, reader: Reader) -> None:
         BRDF.read(self, reader)        # (no super(): plugin classes are rebuilt per variant)
-        self.table_resolution = None
         self.table = None                   # T(p, q) = sin α tan β
         if "table_resolution" in reader.props and self.method != "table":
             raise reader.error("table_resolution", reader.props["table_resolution"],
@@ -251,13 +229,7 @@ class OrenNayar(BRDF):
             if self.energy_compensation:
                 raise reader.error("method", "table", '"exact" with energy_compensation '
                                    "(EON has no table of the lecture's sin α tan β)")
-            res = reader.props.get("table_resolution", TABLE_DEFAULT)
-            if not isinstance(res, int) or isinstance(res, bool):
-                raise reader.error("table_resolution", res,
-                                   f"an integer in [{TABLE_MIN}, {TABLE_MAX}]")
-            reader.check("table_resolution", res, TABLE_MIN, TABLE_MAX)
-            self.table_resolution = res
-            self.table = table_grid(res)
+            self.table = table_grid(self.table_resolution)
 
     def has_diffuse(self) -> bool:
         return not self.off("reflectance")
@@ -290,6 +262,6 @@ class OrenNayar(BRDF):
 
     def describe(self) -> dict:
         fields = BRDF.describe(self)
-        if self.method == "table":
-            fields["table_resolution"] = self.table_resolution
+        if self.method != "table":
+            del fields["table_resolution"]
         return fields

@@ -2,44 +2,7 @@
 ``phong`` — Lambert diffuse + Phong specular reflection
 =======================================================
 
-.. list-table::
-   :header-rows: 1
-
-   * - Parameter
-     - Type
-     - Description
-     - Default
-   * - ``diffuse_reflectance``
-     - float, rgb, spectrum or texture (∂)
-     - m_D, the diffuse colour, >= 0 (above 1 allowed: scanline mode clamps).
-     - 0.5
-   * - ``specular_reflectance``
-     - float, rgb, spectrum or texture (∂)
-     - m_S, the specular colour, >= 0. With the default m_D + m_S = 1 the hdr
-       model reflects at most all the light it receives.
-     - 0.5
-   * - ``exponent``
-     - float or texture in [0, 1e8] (∂)
-     - gamma, the specular power: the larger, the smaller and sharper the
-       highlight (the lecture: "one or two hundreds" in practice). gamma = 0 is a
-       uniform lobe over the hemisphere about the mirror direction. The lobe
-       is evaluated and sampled to ~1e-6 at any gamma (:mod:`mi_brdfs.bsdfs.powercos`);
-       the bound ``MAX_EXPONENT`` = 1e8 (a lobe 1e-4 rad wide) keeps it well
-       above the spacing of float32 directions (~1e-7).
-     - 100
-   * - ``energy_compensation``
-     - boolean
-     - hdr only (with ``mode="scanline"`` a load-time error): adds the
-       reciprocal multiple-scattering lobe of Kulla & Conty 2017 /
-       Turquin 2019 (:mod:`mi_brdfs.bsdfs.energy`), so that a white lobe
-       (m_S = 1) reflects 1 at every incident angle. Per-bounce colour
-       m_S. E(μ, γ) is tabulated from the hdr lobe above over cos θ and
-       log(1 + γ), γ in [0, 1e8].
-     - false
-   * - ``mode``
-     - string
-     - ``"hdr"`` (radiometric, unclamped) or ``"scanline"`` (the lecture's formula).
-     - ``"hdr"``
+.. parameters::
 
 With w_r the viewer (``si.wi``), d the light (``wo``), n the normal and the
 light's mirror direction r = 2 (d·n) n - d, cos(alpha) = w_r·r, ``eval`` returns::
@@ -72,6 +35,13 @@ integrating to less than 1). The specular lobe is picked in proportion to its
 albedo at normal incidence against the diffuse one: m_S vs m_D in hdr mode,
 2 m_S/(gamma + 1) vs m_D in scanline mode (channel means). With m_D = 0 there
 is no diffuse lobe, with m_S = 0 no specular one.
+
+**Energy compensation** (``energy_compensation``): the reciprocal
+multiple-scattering lobe of Kulla & Conty 2017 / Turquin 2019
+(:mod:`mi_brdfs.bsdfs.energy`) returns what the lobe loses below the
+horizon, so that a white lobe (m_S = 1) reflects 1 at every incident angle.
+Per-bounce colour m_S. E(μ, γ) is tabulated from the hdr lobe above over
+cos θ and log(1 + γ), γ in [0, 1e8].
 
 .. code-block:: xml
 
@@ -150,14 +120,22 @@ ALBEDO_AXES = (Axis("mu", 0.0, 1.0, 33, "sqrt"), Axis("exponent", 0.0, MAX_EXPON
 
 
 class Phong(BRDF):
-    """Also the base of :class:`mi_brdfs.bsdfs.blinn.Blinn`, which differs only by
-    the formulas below (its module's functions of the same names)."""
+    # Also the base of blinn.Blinn, which differs only by the formulas below
+    # (its module's functions of the same names) and its exponent's meaning.
     name = "phong"
     compensable = True
     PARAMS = (
-        Param("diffuse_reflectance", 0.5),                                    # m_D
-        Param("specular_reflectance", 0.5),                                   # m_S
-        Param("exponent", 100.0, 0.0, MAX_EXPONENT, kind="scalar", role="shape"),  # gamma
+        Param("diffuse_reflectance", 0.5, doc="m_D, the diffuse colour; above 1 allowed "
+              "(scanline mode clamps)."),
+        Param("specular_reflectance", 0.5, doc="m_S, the specular colour. With the default "
+              "m_D + m_S = 1 the hdr model reflects at most all the light it receives."),
+        Param("exponent", 100.0, 0.0, MAX_EXPONENT, kind="scalar", role="shape",
+              doc="γ, the specular power: the larger, the smaller and sharper the highlight "
+                  "(the lecture: \"one or two hundreds\" in practice). γ = 0 is a uniform lobe "
+                  "over the hemisphere about the mirror direction. The lobe is evaluated and "
+                  "sampled to ~1e-6 at any γ (:mod:`mi_brdfs.bsdfs.powercos`); the bound "
+                  "``MAX_EXPONENT`` = 1e8 (a lobe 1e-4 rad wide) keeps it well above the "
+                  "spacing of float32 directions (~1e-7)."),
     )
     specular_scanline = staticmethod(specular_scanline)
     specular_hdr = staticmethod(specular_hdr)

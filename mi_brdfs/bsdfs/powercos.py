@@ -16,8 +16,8 @@ the lobe onto a handful of rings (onto the axis itself beyond e ~ 10^8). Here:
 
 - the versine 1 - cos(theta) is computed without cancellation: for unit
   directions from the difference v - a (exact in floating point near the axis,
-  Sterbenz), as (|v - a|² - (|v| - |a|)²) / (2 |v| |a|); about the normal from
-  sin²(theta) = (x² + y²)/|v|², as sin²/(1 + cos);
+  Sterbenz), as ``(|v - a|² - (|v| - |a|)²) / (2 |v| |a|)``; about the normal from
+  ``sin²(theta) = (x² + y²)/|v|²``, as sin²/(1 + cos);
 - cos^e(theta) = exp(e · log1p(-(1 - cos theta))) near the axis,
   exp(e log cos theta) away from it (where cos theta itself is accurate);
 - the sampler inverts the cdf cos^(e+1)(theta) = u as
@@ -92,7 +92,7 @@ def cos_versin(v, axis):
 
 def cos_versin_z(v):
     """(cos theta, 1 - cos theta) of v (any length, e.g. a half vector d + w_r)
-    about +z, from sin²(theta) = (x² + y²)/|v|²; the zero vector gives (0, 1)."""
+    about +z, from ``sin²(theta) = (x² + y²)/|v|²``; the zero vector gives (0, 1)."""
     norm2 = dr.squared_norm(v)
     zero = norm2 < TINY
     norm2 = dr.select(zero, 1.0, norm2)

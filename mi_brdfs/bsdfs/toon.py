@@ -2,63 +2,7 @@
 ``toon`` — toon (cel) shading: stepped diffuse and specular colours
 ===================================================================
 
-.. list-table::
-   :header-rows: 1
-
-   * - Parameter
-     - Type
-     - Description
-     - Default
-   * - ``diffuse_reflectance``
-     - float, rgb, spectrum or texture (∂)
-     - m_D1, the lit colour (d·n >= t_D). >= 0; above 1 allowed (scanline clamps).
-     - 0.8
-   * - ``diffuse_shade``
-     - float, rgb, spectrum or texture (∂)
-     - m_D2, the shade colour (d·n < t_D, lights behind the surface included).
-     - 0.2
-   * - ``diffuse_threshold``
-     - float or texture in [-1, 1] (∂)
-     - t_D, compared with d·n.
-     - 0.5
-   * - ``specular_reflectance``
-     - float, rgb, spectrum or texture (∂)
-     - m_S1, the highlight colour (cosine >= t_S).
-     - 1.0
-   * - ``specular_shade``
-     - float, rgb, spectrum or texture (∂)
-     - m_S2, the colour outside the highlight (cosine < t_S).
-     - 0.0
-   * - ``specular_threshold``
-     - float or texture in [-1, 1] (∂)
-     - t_S, compared with the specular cosine.
-     - 0.9
-   * - ``specular_model``
-     - string
-     - ``"phong"``: the cosine is ω_r·r, r = 2(d·n)n - d; ``"blinn"``: n·h,
-       h = normalize(d + ω_r). (The lecture's Phong / Blinn with γ = 1.)
-     - ``"phong"``
-   * - ``smoothness``
-     - float in [0, 2] (∂)
-     - width w of the transition band around each threshold: the colour goes
-       from the second to the first over [t - w/2, t + w/2] with a smoothstep;
-       0 gives the lecture's hard steps.
-     - 0
-   * - ``diffuse_ramp``
-     - texture (∂), optional
-     - replaces m_D1, m_D2 and t_D: the diffuse colour is the texture at
-       uv = ((d·n + 1)/2, 0.5) (see *Ramps*).
-     - none
-   * - ``specular_ramp``
-     - texture (∂), optional
-     - replaces m_S1, m_S2 and t_S: the specular colour is the texture at
-       uv = ((c + 1)/2, 0.5), c the specular cosine.
-     - none
-   * - ``mode``
-     - string
-     - ``"hdr"`` (unclamped, normalised by 1/(2π): see below) or
-       ``"scanline"`` (the lecture's formula).
-     - ``"hdr"``
+.. parameters::
 
 The lecture's model, with d the light (``wo``), ω_r the viewer (``si.wi``), n
 the normal and c = ω_r·r (phong) or n·h (blinn)::
@@ -220,17 +164,33 @@ HDR_SCALE = 1.0 / (2.0 * math.pi)     # hdr: a constant colour c reflects c over
 class Toon(BRDF):
     name = "toon"
     reciprocal = False
-    OPTIONS = (Option("specular_model", "phong", SPECULAR_MODELS),)
+    OPTIONS = (Option("specular_model", "phong", SPECULAR_MODELS,
+                      doc='``"phong"``: the specular cosine is ω_r·r, r = 2(d·n)n - d; '
+                          '``"blinn"``: n·h, h = normalize(d + ω_r) (the lecture\'s Phong '
+                          "and Blinn with γ = 1)."),)
     PARAMS = (
-        Param("diffuse_reflectance", 0.8),                                       # m_D1
-        Param("diffuse_shade", 0.2),                                             # m_D2
-        Param("diffuse_threshold", 0.5, -1.0, 1.0, kind="scalar", role="shape"),   # t_D
-        Param("specular_reflectance", 1.0),                                      # m_S1
-        Param("specular_shade", 0.0),                                            # m_S2
-        Param("specular_threshold", 0.9, -1.0, 1.0, kind="scalar", role="shape"),  # t_S
-        Param("smoothness", 0.0, 0.0, 2.0, kind="float", role="shape"),          # band width w
-        Param("diffuse_ramp", 0.0),                                              # f_mD
-        Param("specular_ramp", 0.0),                                             # f_mS
+        Param("diffuse_reflectance", 0.8, doc="m_D1, the lit colour (d·n >= t_D); above 1 "
+              "allowed (scanline mode clamps)."),
+        Param("diffuse_shade", 0.2, doc="m_D2, the shade colour (d·n < t_D, lights behind "
+              "the surface included)."),
+        Param("diffuse_threshold", 0.5, -1.0, 1.0, kind="scalar", role="shape",
+              doc="t_D, compared with d·n."),
+        Param("specular_reflectance", 1.0, doc="m_S1, the highlight colour (specular "
+              "cosine >= t_S)."),
+        Param("specular_shade", 0.0, doc="m_S2, the colour outside the highlight (cosine "
+              "< t_S)."),
+        Param("specular_threshold", 0.9, -1.0, 1.0, kind="scalar", role="shape",
+              doc="t_S, compared with the specular cosine."),
+        Param("smoothness", 0.0, 0.0, 2.0, kind="float", role="shape",
+              doc="width w of the transition band around each threshold: the colour goes "
+                  "from the second to the first over [t - w/2, t + w/2] with a smoothstep; "
+                  "0 gives the lecture's hard steps."),
+        Param("diffuse_ramp", 0.0, optional=True,
+              doc="replaces m_D1, m_D2 and t_D: the diffuse colour is this texture at "
+                  "uv = ((d·n + 1)/2, 0.5) (see *Ramps*)."),
+        Param("specular_ramp", 0.0, optional=True,
+              doc="replaces m_S1, m_S2 and t_S: the specular colour is this texture at "
+                  "uv = ((c + 1)/2, 0.5), c the specular cosine."),
     )
 
     def read(self, reader: Reader) -> None:

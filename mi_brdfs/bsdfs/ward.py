@@ -2,57 +2,7 @@
 ``ward`` — Ward: Lambert diffuse + anisotropic Gaussian specular
 ================================================================
 
-.. list-table::
-   :header-rows: 1
-
-   * - Parameter
-     - Type
-     - Description
-     - Default
-   * - ``diffuse_reflectance``
-     - float, rgb, spectrum or texture (∂)
-     - m_D, the Lambert colour, >= 0 (above 1 allowed: scanline mode clamps).
-     - 0.5
-   * - ``specular_reflectance``
-     - float, rgb, spectrum or texture (∂)
-     - m_S, the specular colour, >= 0.
-     - 0.2
-   * - ``alpha``
-     - float or texture >= 0 (∂)
-     - isotropic roughness: sets both alpha_u and alpha_v. Giving it together
-       with ``alpha_u`` or ``alpha_v`` is an error.
-     - 0.1
-   * - ``alpha_u``
-     - float or texture >= 0 (∂)
-     - alpha_t, the roughness along the tangent t: Mitsuba's shading-frame
-       ``s`` axis (local x, i.e. along dp/du), so the highlight follows the
-       surface's UV parametrisation.
-     - 0.1
-   * - ``alpha_v``
-     - float or texture >= 0 (∂)
-     - alpha_b, the roughness along the bitangent b (local y).
-     - 0.1
-   * - ``formula``
-     - string
-     - ``"vectors"``: the lecture's efficient dot-product form; ``"angles"``:
-       its angle form (tan delta, cos phi, sin phi). Equal to float32
-       precision; the choice is pure speed.
-     - ``"vectors"``
-   * - ``energy_compensation``
-     - boolean
-     - hdr only (with ``mode="scanline"`` a load-time error): adds the
-       reciprocal multiple-scattering lobe of Kulla & Conty 2017 /
-       Turquin 2019 (:mod:`mi_brdfs.bsdfs.energy`), so that a white lobe
-       (m_S = 1) reflects 1 at every incident angle. Per-bounce colour
-       m_S. E is tabulated from the hdr lobe over (cos θ, α) when
-       isotropic and (cos θ, sin²φ, α_u, α_v) when anisotropic; where
-       Ward's own albedo exceeds 1 (within a fraction of a degree of the
-       horizon) E is clamped to 1: nothing is added there.
-     - false
-   * - ``mode``
-     - string
-     - ``"hdr"`` or ``"scanline"``.
-     - ``"hdr"``
+.. parameters::
 
 Roughness values below ``ALPHA_MIN`` = 1e-4 (0 included) are clamped to it,
 as in ``cook_torrance``. As in Mitsuba's ``roughconductor``, ``traverse``
@@ -104,6 +54,14 @@ tan²delta is exponential with rate A(phi) = cos²phi/a_t² + sin²phi/a_b²)::
 
 and wo = reflect(w_r, h) has p(wo) = p_h(h) / (4 wo·h). The lobe is picked in
 proportion to mean(m_D) (pi·mean(m_D) in scanline mode) vs mean(m_S).
+
+**Energy compensation** (``energy_compensation``): the reciprocal
+multiple-scattering lobe of Kulla & Conty 2017 / Turquin 2019
+(:mod:`mi_brdfs.bsdfs.energy`), so that a white lobe (m_S = 1) reflects 1 at
+every incident angle. Per-bounce colour m_S. E is tabulated from the hdr lobe
+over (cos θ, α) when isotropic and (cos θ, sin²φ, α_u, α_v) when anisotropic;
+where Ward's own albedo exceeds 1 (within a fraction of a degree of the
+horizon) E is clamped to 1: nothing is added there.
 
 .. code-block:: xml
 
@@ -258,13 +216,23 @@ ANISOTROPIC = energy.AlbedoSpec(
 class Ward(BRDF):
     name = "ward"
     compensable = True
-    OPTIONS = (Option("formula", "vectors", FORMULAS),)
+    OPTIONS = (Option("formula", "vectors", FORMULAS,
+                      doc='``"vectors"``: the lecture\'s efficient dot-product form; '
+                          '``"angles"``: its angle form (tan δ, cos φ, sin φ). Equal to '
+                          "float32 precision; the choice is pure speed."),)
     PARAMS = (
-        Param("diffuse_reflectance", 0.5),                                    # m_D
-        Param("specular_reflectance", 0.2),                                   # m_S
-        Param("alpha", 0.1, kind="scalar", role="shape", upper=1.0),          # a_t = a_b
-        Param("alpha_u", 0.1, kind="scalar", role="shape", upper=1.0),        # a_t
-        Param("alpha_v", 0.1, kind="scalar", role="shape", upper=1.0),        # a_b
+        Param("diffuse_reflectance", 0.5, doc="m_D, the Lambert colour; above 1 allowed "
+              "(scanline mode clamps)."),
+        Param("specular_reflectance", 0.2, doc="m_S, the specular colour."),
+        Param("alpha", 0.1, kind="scalar", role="shape", upper=1.0,
+              doc="isotropic roughness: sets both alpha_u and alpha_v. Giving it together "
+                  "with ``alpha_u`` or ``alpha_v`` is an error."),
+        Param("alpha_u", 0.1, kind="scalar", role="shape", upper=1.0,
+              doc="α_t, the roughness along the tangent t: Mitsuba's shading-frame ``s`` "
+                  "axis (local x, along dp/du), so the highlight follows the surface's UV "
+                  "parametrisation."),
+        Param("alpha_v", 0.1, kind="scalar", role="shape", upper=1.0,
+              doc="α_b, the roughness along the bitangent b (local y)."),
     )
 
     def read(self, reader: Reader) -> None:

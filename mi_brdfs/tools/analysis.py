@@ -92,7 +92,7 @@ def polar_lobes(ax, bsdf, angles=(0, 30, 60, 80), title: str = "") -> None:
 
 def camera(res: int, fov: float, origin=(0.0, 0.0, 4.0), target=(0.0, 0.0, 0.0)) -> dict:
     """A perspective sensor looking from ``origin`` at ``target`` (y up), a
-    square ``res``² film with a box filter and an independent sampler."""
+    square ``res`` × ``res`` film with a box filter and an independent sampler."""
     import mitsuba as mi
     return {"type": "perspective", "fov": fov,
             "to_world": mi.ScalarTransform4f().look_at(origin=list(origin), target=list(target),

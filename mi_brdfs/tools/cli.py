@@ -390,7 +390,8 @@ def parser() -> Parser:
                    help="samples per pixel (default: the scene's)")
     r.add_argument("--passes", type=integer(1, 4096), default=8,
                    help="render in this many passes (default 8)")
-    r.add_argument("--seed", type=integer(0, UINT32_MAX), default=0)
+    r.add_argument("--seed", type=integer(0, UINT32_MAX), default=0,
+                   help="seed of the first pass; pass k uses seed + k (default 0)")
     r.add_argument("--tonemap", default="clamp", choices=list(tonemap.OPERATORS),
                    help="tone mapping of .png/.jpg outputs (default clamp)")
     r.add_argument("--exposure", type=real(-100, 100), default=0.0,
@@ -402,13 +403,15 @@ def parser() -> Parser:
 
     c = sub.add_parser("compare", parents=[common(threads=False)],
                        help="compare renders (EXR, PNG, JPEG) against a reference; HTML report")
-    c.add_argument("reference")
-    c.add_argument("tests", nargs="+")
+    c.add_argument("reference", help="the reference image (.exr, .png, .jpg)")
+    c.add_argument("tests", nargs="+", help="the images to compare with it")
     c.add_argument("-o", "--output", required=True,
                    help="report folder: new, empty, or a previous report")
     for name in ("max_rmse", "max_relmse", "max_mae", "max_abs", "max_flip"):
-        c.add_argument("--" + name.replace("_", "-"), dest=name, type=real(0, 1e30), default=None)
-    c.add_argument("--min-psnr", dest="min_psnr", type=real(-1e3, 1e3), default=None)
+        c.add_argument("--" + name.replace("_", "-"), dest=name, type=real(0, 1e30), default=None,
+                       metavar="X", help=f"FAIL a test image whose {name[4:]} exceeds X")
+    c.add_argument("--min-psnr", dest="min_psnr", type=real(-1e3, 1e3), default=None,
+                   metavar="DB", help="FAIL a test image whose PSNR is below DB")
     c.add_argument("--flip", choices=("ldr", "hdr"), default=None,
                    help="FLIP mode (default: hdr if an input is EXR, ldr for PNG/JPEG inputs)")
     c.add_argument("--mask-nonfinite", action="store_true",

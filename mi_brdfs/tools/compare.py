@@ -23,9 +23,9 @@ also given per channel):
 mse        mean((t - r)²)
 rmse       sqrt(mse)
 relmse     mean((t - r)² / (r + 0.01)²)              (pbrt's relative MSE)
-mae        mean(|t - r|)
-smape      mean(2 |t - r| / (|t| + |r|)), 0 where both are 0
-max_abs    max(|t - r|)
+mae        ``mean(|t - r|)``
+smape      ``mean(2 |t - r| / (|t| + |r|))``, 0 where both are 0
+max_abs    ``max(|t - r|)``
 psnr       10 log10(peak² / mse), inf if mse = 0, with ONE peak for the
            overall value and every channel: 1 when every input is PNG/JPEG,
            else the reference's maximum over all channels (1 if it is
@@ -274,7 +274,7 @@ def verdict(m: dict, thresholds: dict[str, float]) -> list[str]:
 # ----------------------------------------------------------------------------
 
 def robust_span(values: np.ndarray, percentile: float = PERCENTILE) -> float:
-    """The scale of an error picture: the given percentile of |values| (not the
+    """The scale of an error picture: the given percentile of ``|values|`` (not the
     single largest error, which would make every other pixel look black)."""
     finite = np.abs(values[np.isfinite(values)])
     if not finite.size:

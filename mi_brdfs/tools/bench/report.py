@@ -197,22 +197,24 @@ def write_csv(path: str, results: dict) -> None:
                         w.writerow([group, i, k, v])
 
 
-def markdown(results: dict, about: dict[str, str]) -> str:
+def markdown(results: dict, about: dict[str, str], images: str = "") -> str:
     """README.md: the run, the findings (or the smoke-test notice), and per
-    group what it measures (``about``), its table and its plots."""
+    group what it measures (``about``), its table and its plots (their paths
+    prefixed with ``images``: the documentation site shows the committed
+    results from another folder)."""
     lines = ["# mi-brdfs bench results", "",
              f"{results['settings_name']} run, {results['seconds']:.0f} s ("
              + ", ".join(f"{g} {t:.0f} s" for g, t in results.get("group_seconds", {}).items())
              + "). Machine: "
              + ", ".join(f"{k} {v}" for k, v in results["machine"].items()) + ".", ""]
-    if results["smoke_test"]:
+    if results.get("smoke_test"):
         lines += [f"**{SMOKE_TEST}**", ""]
     lines += ["Timings are medians of repeated renders after a warm-up (compile) render, "
               "in one process (materials, frozen, kernels, tracing: in processes of their own, "
               "as Dr.Jit traces every BSDF instance alive in the process); errors are relative "
               "MSE against a converged reference.", ""]
-    if not results["smoke_test"]:
-        lines += ["## Findings", "", *(f"- {line}" for line in results["findings"]), ""]
+    if not results.get("smoke_test"):
+        lines += ["## Findings", "", *(f"- {line}" for line in results.get("findings", [])), ""]
     for group, rows in results["groups"].items():
         if not rows:
             continue
@@ -224,7 +226,7 @@ def markdown(results: dict, about: dict[str, str]) -> str:
             lines += [about[group], ""]
         lines += ["| " + " | ".join(keys) + " |", "|" + "---|" * len(keys)]
         lines += ["| " + " | ".join(_fmt(r.get(k, "")) for k in keys) + " |" for r in rows]
-        lines += ["", *(f"![{p}]({p})" for p in results["plots"].get(group, [])), ""]
+        lines += ["", *(f"![{p}]({images}{p})" for p in results["plots"].get(group, [])), ""]
     return "\n".join(lines)
 
 

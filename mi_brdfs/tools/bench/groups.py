@@ -19,7 +19,8 @@ import numpy as np
 
 from .. import catalog
 from . import plots, report
-from .measure import FULL, Settings, References, efficiency, image, relmse, scene_dict, timed
+from .measure import (FULL, References, Settings, alternating, efficiency, image, relmse,
+                      scene_dict, timed)
 from .workers import in_subprocess
 
 
@@ -171,17 +172,19 @@ def lobes(s: Settings, refs: References) -> list[dict]:
 
 def energy(s: Settings, refs: References) -> list[dict]:
     """Energy compensation: render time of each compensated model with
-    energy_compensation on vs off (same scene and spp), and the time to build
-    its albedo table (as python -m mi_brdfs.tools.tables does)."""
+    energy_compensation on vs off (same scene and spp; on and off taking turns
+    in one process, medians; wall and kernel execution time), and the time to
+    build its albedo table (as python -m mi_brdfs.tools.tables does)."""
     import mitsuba as mi
 
     from ...bsdfs import energy as tables
     built: dict[str, float] = {}
     rows = []
     for name, config in catalog.BENCH_ENERGY:
-        t_off = timed(mi.load_dict(scene_dict(config, s.res)), s.spp, s.repeats)
-        t_on = timed(mi.load_dict(scene_dict({**config, "energy_compensation": True}, s.res)),
-                     s.spp, s.repeats)
+        t = alternating({"off": mi.load_dict(scene_dict(config, s.res)),
+                         "on": mi.load_dict(scene_dict({**config, "energy_compensation": True},
+                                                       s.res))}, s.spp, s.repeats)
+        t_off, t_on = t["off"], t["on"]
         spec = mi.load_dict(config).albedo_spec()
         if spec is not None and spec.name not in built:
             start = time.perf_counter()
@@ -189,6 +192,7 @@ def energy(s: Settings, refs: References) -> list[dict]:
             built[spec.name] = time.perf_counter() - start
         rows.append({"name": name, "off_s": t_off["median_s"], "on_s": t_on["median_s"],
                      "ratio": t_on["median_s"] / t_off["median_s"],
+                     "execution_ratio": t_on["execution_s"] / t_off["execution_s"],
                      "table": spec.name if spec else "(analytic)",
                      "table_nodes": int(np.prod([a.n for a in spec.axes])) if spec else 0,
                      "table_samples": s.table_samples if spec else 0,

@@ -610,8 +610,7 @@ class State:
 
 
 STATE = ("params", "live", "diffuse", "specular", "multiple", "diffuse_index",
-         "specular_index", "energy_compensation", "plan", "switches",
-         "table_slice")                                 # what the base keeps per instance
+         "specular_index", "energy_compensation", "plan", "switches")   # what the base keeps
 
 
 class BRDF:
@@ -731,24 +730,19 @@ class BRDF:
                 check_value(self.name, name, rng[1], lo, hi, p.valid())
         self.update_lobes()
 
-    def constant(self, name: str) -> float | None:
-        """The value of parameter ``name`` if it is a constant that cannot
-        change: not spatially varying, not grad-enabled, never updated (else None)."""
-        if name not in self.params or name in self.live:
-            return None
-        obj = getattr(self, "m_" + name)
-        if grad_enabled(obj):
-            return None
-        if isinstance(obj, mi.Object) and obj.is_spatially_varying():
-            return None
-        rng = value_range(obj)
-        return rng[0] if rng is not None and rng[0] == rng[1] else None
-
     def off(self, name: str, value: float = 0.0) -> bool:
         """True if parameter ``name`` is the constant ``value`` (0: a black colour
-        or a zero weight; :meth:`constant`). Models use it to drop lobes that
-        cannot matter."""
-        return self.constant(name) == value
+        or a zero weight) and cannot change: not spatially varying, not
+        grad-enabled, never updated. Models use it to drop lobes that cannot matter."""
+        if name not in self.params or name in self.live:
+            return False
+        obj = getattr(self, "m_" + name)
+        if grad_enabled(obj):
+            return False
+        if isinstance(obj, mi.Object) and obj.is_spatially_varying():
+            return False
+        rng = value_range(obj)
+        return rng is not None and rng == (value, value)
 
     def switch(self, name: str):
         """Plain-number parameter ``name`` as the formulas take it: the Python
@@ -802,33 +796,11 @@ class BRDF:
     def albedo(self, inp, v):
         """Single-scattering directional albedo of the compensated lobe per unit
         colour, at direction v (local), for :mod:`.energy`."""
-        if self.table_slice is not None:
-            return self.table_slice(v)
         return energy.table(self.albedo_spec())(v, *self.table_parameters(inp))
 
     def albedo_average(self, inp):
         """Its cosine-weighted hemispherical average."""
-        if self.table_slice is not None:
-            return mi.Float(self.table_slice.e_avg)
         return energy.table(self.albedo_spec()).average(*self.table_parameters(inp))
-
-    def update_table_slice(self) -> None:
-        """With compensation, a tabulated albedo and every parameter but the
-        colours a constant (:meth:`constant`), the table sliced at those
-        parameters (:class:`.energy.AlbedoSlice`): a lookup interpolates along
-        the direction axes only and E_avg is a number. The same values as the
-        full lookup; its array a member, so frozen functions see it."""
-        self.table_slice = None
-        self.m_ms_slice = None
-        spec = self.albedo_spec() if self.multiple else None
-        if spec is None or any(self.constant(p.name) is None for p in self.params.values()
-                               if p.role != "colour"):
-            return
-        inp = self.evaluate(dr.zeros(mi.SurfaceInteraction3f), True)
-        params = [x if isinstance(x, (int, float)) else float(dr.slice(x))
-                  for x in self.table_parameters(inp)]
-        self.table_slice = energy.table(spec).slice(*params)
-        self.m_ms_slice = self.table_slice.data
 
     def ms_colour(self, inp):
         """The per-bounce colour of the compensated lobe (see :func:`.energy.ms_colour`)."""
@@ -870,15 +842,13 @@ class BRDF:
         self.plan = Plan(Lobes(self.diffuse, self.specular, self.multiple),
                          self.mode == "scanline", self.sampling == "cosine",
                          self.diffuse_sampling() == "uniform", self.lit_from_behind())
-        self.update_table_slice()
 
     def trace_key(self) -> tuple:
         """The Python-side choices that decide what a call traces beyond the
         flags: the plan and the parameters folded as numbers. A frozen
         function keys on it (:mod:`mi_brdfs.render.frozen`): a change
         re-records instead of replaying stale code."""
-        return (self.plan, tuple(sorted(self.switches.items())),
-                None if self.table_slice is None else self.table_slice.e_avg)
+        return self.plan, tuple(sorted(self.switches.items()))
 
     def enabled(self, ctx) -> Lobes:
         """The lobes that exist and that ctx asks for."""

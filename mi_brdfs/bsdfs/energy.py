@@ -126,46 +126,17 @@ class AlbedoTable:
 
     def __call__(self, v, *params):
         """E at the local direction v (clamped to [0, 1]) for the parameters."""
-        return dr.fmin(dr.fmax(self.grid(*coordinates(v, self.spec.directions), *params),
-                               0.0), 1.0)
+        mu = dr.fmin(dr.fmax(mi.Frame3f.cos_theta(v), 0.0), 1.0)
+        coords = [mu]
+        if self.spec.directions == 2:
+            rho2 = dr.square(v.x) + dr.square(v.y)
+            ok = rho2 > 0
+            coords.append(dr.select(ok, dr.square(v.y) / dr.select(ok, rho2, 1.0), 0.0))
+        return dr.fmin(dr.fmax(self.grid(*coords, *params), 0.0), 1.0)
 
     def average(self, *params):
         """E_avg for the parameters."""
         return dr.fmin(dr.fmax(self.average_grid(*params), 0.0), 1.0)
-
-    def slice(self, *params: float) -> AlbedoSlice:
-        """The table at fixed parameters (Python numbers): see :class:`AlbedoSlice`."""
-        return AlbedoSlice(self, params)
-
-
-def coordinates(v, directions: int) -> list:
-    """A table's direction coordinates of the local direction v: cos θ, and
-    sin²φ for an anisotropic lobe."""
-    mu = dr.fmin(dr.fmax(mi.Frame3f.cos_theta(v), 0.0), 1.0)
-    if directions == 1:
-        return [mu]
-    rho2 = dr.square(v.x) + dr.square(v.y)
-    ok = rho2 > 0
-    return [mu, dr.select(ok, dr.square(v.y) / dr.select(ok, rho2, 1.0), 0.0)]
-
-
-class AlbedoSlice:
-    """An :class:`AlbedoTable` at fixed parameters: a table over the direction
-    axes alone, whose lookups equal the full table's at those parameters
-    (2 or 4 corners instead of 4 or 16: Ward's anisotropic table is 4-D), and
-    E_avg a number. For a plugin whose table parameters are constants
-    (:meth:`mi_brdfs.bsdfs.base.BRDF.update_lobes`); ``data``: its Dr.Jit array,
-    for the plugin to hold as a member (frozen functions)."""
-
-    def __init__(self, table: AlbedoTable, params: tuple[float, ...]):
-        d = table.spec.directions
-        self.directions = d
-        self.grid = Grid(table.spec.axes[:d], table.grid.contract(*params))
-        self.data = self.grid._flat
-        self.e_avg = float(np.clip(table.average_grid.contract(*params), 0.0, 1.0))
-
-    def __call__(self, v):
-        return dr.fmin(dr.fmax(self.grid(*coordinates(v, self.directions)), 0.0), 1.0)
 
 
 _tables: dict[tuple[str, str], AlbedoTable] = {}

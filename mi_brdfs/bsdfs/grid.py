@@ -113,16 +113,6 @@ class Grid:
             result += weight * self._gather(index)
         return result
 
-    def contract(self, *xs) -> np.ndarray:
-        """The interpolant at the points xs of the last ``len(xs)`` axes, as the
-        node values over the remaining axes (NumPy): a table sliced at fixed
-        parameters, whose lookups along the remaining axes then equal the
-        full lookups (the interpolation is linear along each axis)."""
-        result = self.values
-        for axis, x in zip(self.axes[::-1], xs[::-1]):
-            result = np.tensordot(result, axis.hats(np.array([float(x)]))[0], axes=(-1, 0))
-        return result
-
     def integrate(self, weights: list[np.ndarray]) -> np.ndarray:
         """Sum the values against node weights along the first ``len(weights)``
         axes (e.g. :meth:`Axis.quadrature` of a density): the integral of the

@@ -587,27 +587,6 @@ def test_a_number_folded_at_0_or_1_unfolds_when_it_changes(name, rng):
                                        err_msg=f"{name}.{p.name}: {value} -> {other}")
 
 
-@pytest.mark.parametrize("name", [n for n, c in PLUGINS.items() if c.compensable])
-def test_a_compensation_table_sliced_at_constant_parameters_equals_the_full_lookup(name, rng):
-    """With every parameter but the colours a constant, the compensation's table
-    is looked up sliced at them (along the direction axes only, E_avg a
-    number): the same eval and pdf as the full lookup, which a parameter given
-    as a texture (of the same value) keeps."""
-    config = {**ENTRIES[name].interior[0], "mode": "hdr", "energy_compensation": True}
-    bsdf = mi.load_dict(config)
-    if bsdf.albedo_spec() is None:                      # an analytic albedo (EON)
-        pytest.skip(f"{name}: no table")
-    assert bsdf.table_slice is not None
-    shape = next(p for p in PLUGINS[name].PARAMS if p.kind == "scalar" and p.name in config)
-    full = mi.load_dict({**config, shape.name: {"type": "checkerboard",
-                                                "color0": config[shape.name],
-                                                "color1": config[shape.name]}})
-    assert full.table_slice is None
-    wi, wo = mirror_pairs(rng, 2048, ENTRIES[name].lobe_width, min_cos=0.02)
-    for a, b in zip(evaluate(bsdf, wi, wo), evaluate(full, wi, wo)):
-        np.testing.assert_allclose(a, b, rtol=2e-6, atol=1e-8)
-
-
 # ----------------------------------------------------------------------------
 #  10. Every property form, every direct call
 # ----------------------------------------------------------------------------

@@ -27,8 +27,8 @@ normal, and the roughness rho (called ``alpha`` in the plugins)::
 
 Scale-safe: every function is exact, finite and NaN-free, values and
 gradients, for directions down to cos θ = 1e-30 and exactly 0 and for
-``alpha >= ALPHA_MIN``. The half vector is normalised after dividing by its
-largest component (``|wi + wo|²`` underflows below cos θ ~ 1e-19), and the Smith
+``alpha >= ALPHA_MIN``. The half vector is normalised after scaling by 2^62
+(``|wi + wo|²`` underflows below cos θ ~ 1e-19), and the Smith
 forms are written as ratios that need no tan² or 1/cos (G1 -> 0 at grazing).
 """
 from __future__ import annotations
@@ -52,17 +52,18 @@ DISTRIBUTIONS = ("blinn", "beckmann", "ggx")
 GEOMETRIES = ("cook_torrance", "smith")
 
 
-FLOAT_MIN = 2.0 ** -126    # the smallest normal float32
+H_SCALE = 2.0 ** 62         # wi + wo is scaled by this before |.|² (exact: a power of 2)
+H_NORM2_MIN = 1e-30         # |h|² floor: 0 only for wi = -wo (|wi + wo| < 2e-34)
 
 
 def half_vector(wi, wo):
-    """normalize(wi + wo), exact for any scale; the zero vector when wi = -wo.
-    The sum is divided by its largest component first (|h|² in [1, 3]; the zero
-    vector stays 0, and 0 · rsqrt(1/2) has no NaN, in values or derivatives)."""
-    x, y, z = wi.x + wo.x, wi.y + wo.y, wi.z + wo.z
-    inv = 1.0 / dr.fmax(dr.fmax(dr.fmax(dr.abs(x), dr.abs(y)), dr.abs(z)), FLOAT_MIN)
-    x, y, z = x * inv, y * inv, z * inv
-    n = dr.rsqrt(dr.fmax(dr.fma(x, x, dr.fma(y, y, z * z)), 0.5))
+    """normalize(wi + wo), exact for |wi + wo| from 2e-34 to 2: the sum is
+    scaled by 2^62 first, so that its squared length neither underflows (two
+    directions above the horizon, cos θ > 1e-20, have |wi + wo| > 2e-20) nor
+    overflows. The zero vector (wo = -wi) stays 0, with no NaN in values or
+    derivatives."""
+    x, y, z = (wi.x + wo.x) * H_SCALE, (wi.y + wo.y) * H_SCALE, (wi.z + wo.z) * H_SCALE
+    n = dr.rsqrt(dr.fmax(dr.fma(x, x, dr.fma(y, y, z * z)), H_NORM2_MIN))
     return mi.Vector3f(x * n, y * n, z * n)
 
 

@@ -941,9 +941,11 @@ class BRDF:
         values, pdf, up = self.lobes(use, probs, inp, si, wo, active)
         active = up & (pdf > 0)                         # (a failed sample: pdf 0)
         lone = values[0] if len(values) == 1 and type(values[0]) is Scaled else None
-        if lone is not None and own and lone.ratio is not None:
+        closed = lone is not None and own and lone.ratio is not None
+        if closed:
             # f / pdf in closed form (e.g. Lambert: its colour): no division, no guard
-            weight = lone.colour * dr.select(active, lone.ratio, 0.0)
+            weight = dr.select(active, lone.colour, 0.0) if one(lone.ratio) \
+                else lone.colour * dr.select(active, lone.ratio, 0.0)
         else:
             # A weight beyond WEIGHT_MAX is no sample of the model but float32
             # failing it: a near-mirror lobe at a grazing viewer (alpha 1e-4, cos
@@ -965,7 +967,8 @@ class BRDF:
                 weight = lone.colour * weight
         # no NaN from inactive lanes either (a warp of sample2 has none anywhere)
         bs = mi.BSDFSample3f(dr.select(active, wo, 0.0) if modelled else wo)
-        bs.pdf = dr.select(active, pdf, 0.0)
+        # (0 already wherever a closed-form weight is: the pdf is 0 below the surface)
+        bs.pdf = pdf if closed else dr.select(active, pdf, 0.0)
         bs.eta = 1.0
         if type(glossy) is bool:                       # the picked lobe is known
             bs.sampled_type = mi.UInt32(GLOSSY if glossy else DIFFUSE)

@@ -151,8 +151,9 @@ class CookTorrance(BRDF):
         Option("distribution", "beckmann", mf.DISTRIBUTIONS, doc="D, the distribution term."),
         Option("geometry", "cook_torrance", mf.GEOMETRIES,
                doc='G: ``"cook_torrance"`` is the lecture\'s microfacet (V-cavity) term, '
-                   '``"smith"`` G1(ω_r)·G1(d): the lecture\'s g_GGX for ggx, the exact Smith '
-                   "Beckmann G1 for beckmann, and for blinn the Smith G1 of the Blinn "
+                   '``"smith"`` G1(ω_r)·G1(d): the lecture\'s g_GGX for ggx, the Smith '
+                   "Beckmann G1 for beckmann (a rational fit of its erf form, within 5.5e-6), "
+                   "and for blinn the Smith G1 of the Blinn "
                    "distribution itself, tabulated (:mod:`mi_brdfs.bsdfs.microfacet`)."),
         Option("sample_visible", True,
                doc="Beckmann and GGX: sample the visible normals (else the full distribution "

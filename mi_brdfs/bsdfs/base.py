@@ -45,9 +45,12 @@ A model subclasses :class:`BRDF` and supplies:
     estimates of each lobe's albedo (weights included), for lobe selection;
 ``sample_specular(inp, si, sample2)``, ``pdf_specular(inp, si, wo)``
     the glossy lobe's sampler and its density;
-and, if ``compensable``: ``ms_colour(inp)`` and either ``albedo_spec()`` and
-``table_parameters(inp)`` (a tabulated albedo, :mod:`.energy`) or
-``albedo(inp, v)`` and ``albedo_average(inp)`` (an analytic one).
+and, if ``compensable`` (:mod:`.energy`): ``ms_colour(inp)``, the colour C
+that scales the multiple-scattering lobe, and either ``compensation()`` (an
+:class:`.energy.Table` of its albedo g per unit colour) and
+``table_parameters(inp)``, or ``ms_albedo(inp, v)`` and ``ms_average(inp)``
+(an analytic g). The base holds the table's Dr.Jit arrays as the member
+``m_ms``, so that Dr.Jit traverses them with the plugin (frozen functions).
 """
 from __future__ import annotations
 
@@ -301,6 +304,10 @@ class BRDF:
         self.params: dict[str, Param] = {}     # the parameters read, by name
         self.live: set[str] = set()            # parameters updated or differentiated
         self.read(reader)
+        if self.energy_compensation:
+            table = self.compensation()
+            if table is not None:            # its arrays: traversed with the plugin
+                self.m_ms = table.arrays()
         self.update_lobes()
 
     def __init_subclass__(cls, **kwargs):     # (no super(): bind() copies this body)
@@ -417,25 +424,31 @@ class BRDF:
         return self.f_specular(inp, si, wo), self.pdf_specular(inp, si, wo)
 
     def albedo_spec(self) -> energy.AlbedoSpec | None:
-        """The :class:`.energy.AlbedoSpec` whose table holds this instance's
-        single-scattering albedo (None: a model with an analytic one)."""
+        """The :class:`.energy.AlbedoSpec` of this instance's single-scattering
+        albedo (None: a model with an analytic one)."""
         return None
+
+    def compensation(self) -> energy.Table | None:
+        """The table of the multiple-scattering lobe's albedo g per unit colour
+        (default: 1 - E of :meth:`albedo_spec`; None: an analytic g)."""
+        spec = self.albedo_spec()
+        return None if spec is None else energy.complement(spec)
 
     def table_parameters(self, inp) -> tuple:
         """The model parameters of that table's axes, evaluated (``inp``)."""
         raise NotImplementedError
 
-    def albedo(self, inp, v):
-        """Single-scattering directional albedo of the compensated lobe per unit
-        colour, at direction v (local), for :mod:`.energy`."""
-        return energy.table(self.albedo_spec())(v, *self.table_parameters(inp))
+    def ms_albedo(self, inp, v):
+        """g(v): the directional albedo of the multiple-scattering lobe per unit
+        colour, at direction v (local)."""
+        return self.compensation()(v, *self.table_parameters(inp), data=self.m_ms)
 
-    def albedo_average(self, inp):
-        """Its cosine-weighted hemispherical average."""
-        return energy.table(self.albedo_spec()).average(*self.table_parameters(inp))
+    def ms_average(self, inp):
+        """G_avg: its cosine-weighted hemispherical average."""
+        return self.compensation().average(*self.table_parameters(inp), data=self.m_ms)
 
     def ms_colour(self, inp):
-        """The per-bounce colour of the compensated lobe (see :func:`.energy.ms_colour`)."""
+        """The colour C scaling the multiple-scattering lobe (see :mod:`.energy`)."""
         raise NotImplementedError
 
     def diffuse_sampling(self) -> str:
@@ -480,13 +493,13 @@ class BRDF:
         """Everything a call needs at ``si``, each texture evaluated once."""
         inp = self.evaluate(si, active)
         if self.multiple:
-            inp.e_i = self.albedo(inp, si.wi)                 # E(w_i)
-            inp.e_avg = self.albedo_average(inp)              # E_avg
-            inp.f_ms = energy.ms_colour(self.ms_colour(inp), inp.e_avg)
+            inp.g_i = self.ms_albedo(inp, si.wi)              # g(w_i)
+            inp.g_avg = self.ms_average(inp)                  # G_avg
+            inp.f_ms = self.ms_colour(inp)                    # C
         return inp
 
     def f_multiple(self, inp, si, wo):
-        return energy.ms_lobe(inp.f_ms, inp.e_i, self.albedo(inp, wo), inp.e_avg,
+        return energy.ms_lobe(inp.f_ms, inp.g_i, self.ms_albedo(inp, wo), inp.g_avg,
                               mi.Frame3f.cos_theta(wo))
 
     def probabilities(self, inp, si, use: Lobes):
@@ -498,7 +511,7 @@ class BRDF:
         w_ms = mi.Float(0.0)
         if use.multiple:
             w = self.lobe_weights(inp)[0 if self.compensates == "diffuse" else 1]
-            w_ms = w * mean(inp.f_ms) * (1.0 - inp.e_i)
+            w_ms = w * mean(inp.f_ms) * inp.g_i
         weights = [dr.select(u, w, 0.0) if u else mi.Float(0.0)
                    for u, w in zip(use, (w_d, w_s, w_ms))]
         total = weights[0] + weights[1] + weights[2]

@@ -30,11 +30,12 @@
    * - ``energy_compensation``
      - boolean
      - hdr only (with ``mode="scanline"`` a load-time error): adds the
-       reciprocal multiple-scattering lobe of Kulla & Conty 2017 /
-       Turquin 2019 (:mod:`mi_brdfs.bsdfs.energy`), so that a white lobe
-       (m_S = 1) reflects 1 at every incident angle. Per-bounce colour
-       m_S. E(μ, γ) is tabulated from the hdr lobe above over cos θ and
-       log(1 + γ), γ in [0, 1e8].
+       reciprocal lobe of Kulla & Conty 2017 / Turquin 2019
+       (:mod:`mi_brdfs.bsdfs.energy`) that returns what the lobe loses
+       below the horizon, so that the specular lobe reflects m_S at every
+       incident angle (m_S scales it linearly). E(μ, γ) is tabulated from
+       the hdr lobe above over cos θ and log(1 + γ), γ in [0, 1e8], smooth
+       (C2) in γ.
      - false
    * - ``mode``
      - string

@@ -18,12 +18,15 @@ Sections:
    and where. Models with ``energy_compensation`` get a third curve beside the
    two modes, hdr compensated. Where the catalog promises albedo 1 (a white
    energy-preserving configuration, :func:`.catalog.promises_one`) the albedo
-   must be 1 within 1 % up to 85°; coloured lobes stay below 1, since each
-   bounce between microfacets takes its colour again.
+   must be 1 within 1 % up to 85°; a lobe's colour (m_S) scales its
+   compensated albedo linearly, Fresnel is the only per-bounce reflectance.
 3. **Sampling** — Mitsuba's chi-square test (p-value) for each model's grid, and
    the variance of the sample weights (0 would be perfect importance sampling).
 4. **Lobes** — eval (f·cos theta_o) in the plane of incidence for several
    incident angles, both modes, as polar plots.
+5. **Ground truth** — compensated ``cook_torrance`` against the random walk on
+   the Smith microsurface (:mod:`.groundtruth`): albedo against angle and BRDF
+   slices, with the largest difference per D x G against its bound.
 
 The report opens with a summary: every check (each equivalence, each furnace
 row's "albedo <= 1" (or "albedo = 1" where promised) and "render agrees with
@@ -413,6 +416,12 @@ def checks(results: dict) -> list[dict]:
                           r["render_vs_quadrature"] <= limit,
                           f"largest |render − quadrature| {r['render_vs_quadrature']:.4f} "
                           f"(limit {limit:.4f})", r["render_vs_quadrature"]))
+    for r in results.get("groundtruth", []):
+        out.append(_check(f"groundtruth/{r['distribution']}/{r['geometry']}", "ground truth",
+                          f"compensated cook_torrance {r['distribution']}/{r['geometry']} "
+                          f"against the walk on {r['walk']}", r["relative"] <= r["bound"],
+                          f"largest relative difference {100 * r['relative']:.1f} % "
+                          f"(bound {100 * r['bound']:g} %)", r["relative"]))
     for r in results.get("sampling", []):
         out.append(_check(f"sampling/{r['model']}/{r['config']}/{r['theta']:g}", "sampling",
                           f"{r['model']} ({r['config']}): χ² at θ_i = {r['theta']:g}°",
@@ -506,8 +515,8 @@ variant {esc(results['variant'])}. Statistical tests at α = {ALPHA}.</p>
     parts.append("<h2>2. White furnace</h2><p>Rows <i>hdr, compensated</i> are the same "
                  "configuration with <code>energy_compensation</code>: its albedo is 1 "
                  "where its lobes are white (checked against 1 where the catalog promises "
-                 "it); with a coloured or weaker lobe (e.g. m_S = 0.5) each extra bounce "
-                 "takes that colour again (Kulla &amp; Conty 2017), so it stays below 1."
+                 "it); a lobe's colour scales its compensated albedo linearly (m_S = 0.5 "
+                 "reflects 0.5), Fresnel being the only per-bounce reflectance (section 5)."
                  "</p><table><tr><th>model</th><th>configuration</th>"
                  "<th>mode</th><th>max albedo</th><th>at θ_i</th><th>mean</th><th>min</th>"
                  "<th>|render − quadrature|</th><th>flag</th></tr>")
@@ -542,7 +551,10 @@ variant {esc(results['variant'])}. Statistical tests at α = {ALPHA}.</p>
     parts.append("</table><h2>4. Lobes (eval = f·cos θ_o in the plane of incidence; "
                  "viewer on the left)</h2><div class='figs'>")
     parts += [f"<img src='{r['plot']}' alt='lobe {esc(r['model'])}'>" for r in results["lobes"]]
-    parts.append("</div></body></html>\n")
+    from . import groundtruth      # (needs scipy: the reports extra)
+    parts.append("</div><h2>5. Ground truth: the random walk</h2>"
+                 + groundtruth.report_html(results.get("groundtruth", [])))
+    parts.append("</body></html>\n")
     return "".join(parts)
 
 
@@ -570,6 +582,9 @@ def validate(out_dir: str, quick: bool = False, log: Callable[[str], None] = pri
         results["sampling"] = sampling_section(size, chi2)
         log("lobes ...")
         results["lobes"] = lobe_section(tmp, catalog.LOBES)
+        log("ground truth ...")
+        from . import groundtruth
+        results["groundtruth"] = groundtruth.report_section(tmp, quick)
         results["checks"] = checks(results)
         results["summary"] = summary(results["checks"])
         results["seconds"] = time.perf_counter() - start

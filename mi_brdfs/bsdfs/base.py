@@ -47,10 +47,12 @@ A model subclasses :class:`BRDF` and supplies:
     the glossy lobe's sampler and its density;
 and, if ``compensable`` (:mod:`.energy`): ``ms_colour(inp)``, the colour C
 that scales the multiple-scattering lobe, and either ``compensation()`` (an
-:class:`.energy.Table` of its albedo g per unit colour) and
-``table_parameters(inp)``, or ``ms_albedo(inp, v)`` and ``ms_average(inp)``
-(an analytic g). The base holds the table's Dr.Jit arrays as the member
-``m_ms``, so that Dr.Jit traverses them with the plugin (frozen functions).
+:class:`.energy.Table` of its albedo g per unit colour), ``table_parameters(inp)``
+and ``table_sources()`` (the parameter each comes from), or ``ms_albedo(inp, v)``
+and ``ms_average(inp)`` (an analytic g). The base specialises the table at the
+parameters that are constant over the surface (at load time and at every
+update) and holds its Dr.Jit arrays as the member ``m_ms``, so that Dr.Jit
+traverses them with the plugin (frozen functions).
 """
 from __future__ import annotations
 
@@ -304,10 +306,6 @@ class BRDF:
         self.params: dict[str, Param] = {}     # the parameters read, by name
         self.live: set[str] = set()            # parameters updated or differentiated
         self.read(reader)
-        if self.energy_compensation:
-            table = self.compensation()
-            if table is not None:            # its arrays: traversed with the plugin
-                self.m_ms = table.arrays()
         self.update_lobes()
 
     def __init_subclass__(cls, **kwargs):     # (no super(): bind() copies this body)
@@ -438,14 +436,33 @@ class BRDF:
         """The model parameters of that table's axes, evaluated (``inp``)."""
         raise NotImplementedError
 
+    def table_sources(self) -> tuple[str, ...]:
+        """The name of the parameter each table parameter comes from."""
+        raise NotImplementedError
+
+    def specialise_compensation(self) -> None:
+        """The compensation table at the parameters constant over the surface
+        (plain numbers and uniform textures, evaluated once here), its arrays
+        held as the member ``m_ms``."""
+        table = self.compensation()
+        if table is None:
+            return
+        inp = self.evaluate(dr.zeros(mi.SurfaceInteraction3f), True)
+        constants = tuple(
+            None if isinstance(obj, mi.Object) and obj.is_spatially_varying() else to_float(x)
+            for obj, x in zip((getattr(self, "m_" + n) for n in self.table_sources()),
+                              self.table_parameters(inp)))
+        self.ms_table = table.specialise(constants)
+        self.m_ms = self.ms_table.data               # traversed with the plugin
+
     def ms_albedo(self, inp, v):
         """g(v): the directional albedo of the multiple-scattering lobe per unit
         colour, at direction v (local)."""
-        return self.compensation()(v, *self.table_parameters(inp), data=self.m_ms)
+        return self.ms_table(v, self.table_parameters(inp), self.m_ms)
 
     def ms_average(self, inp):
         """G_avg: its cosine-weighted hemispherical average."""
-        return self.compensation().average(*self.table_parameters(inp), data=self.m_ms)
+        return self.ms_table.average(self.table_parameters(inp), self.m_ms)
 
     def ms_colour(self, inp):
         """The colour C scaling the multiple-scattering lobe (see :mod:`.energy`)."""
@@ -482,6 +499,8 @@ class BRDF:
             flags |= c
         self.m_components = components
         self.m_flags = flags
+        if self.multiple:
+            self.specialise_compensation()
 
     def enabled(self, ctx) -> Lobes:
         """The lobes that exist and that ctx asks for."""

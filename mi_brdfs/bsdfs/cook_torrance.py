@@ -305,5 +305,8 @@ class CookTorrance(BRDF):
     def table_parameters(self, inp):
         return (inp.alpha, self.m_f0)
 
+    def table_sources(self):
+        return ("alpha", "f0")
+
     def ms_colour(self, inp):
         return inp.m_s

@@ -194,19 +194,85 @@ class Table:
         """The Dr.Jit arrays of the lookups (None in scalar variants), for a plugin to hold."""
         return {"values": self.grid.data, "average": self.average_grid.data}
 
-    def __call__(self, v, *params, data: dict | None = None):
-        """g at the local direction v for the parameters (>= 0)."""
+    def coordinates(self, v) -> list:
+        """The direction axes' coordinates of the local direction v: cos θ, and
+        sin²φ for an anisotropic table."""
         mu = dr.fmin(dr.fmax(mi.Frame3f.cos_theta(v), 0.0), 1.0)
         coords = [mu]
         if self.directions == 2:
             rho2 = dr.square(v.x) + dr.square(v.y)
             ok = rho2 > 0
             coords.append(dr.select(ok, dr.square(v.y) / dr.select(ok, rho2, 1.0), 0.0))
-        return self.grid(*coords, *params, data=None if data is None else data["values"])
+        return coords
+
+    def __call__(self, v, *params, data: dict | None = None):
+        """g at the local direction v for the parameters (>= 0)."""
+        return self.grid(*self.coordinates(v), *params,
+                         data=None if data is None else data["values"])
+
+    def specialise(self, constants: tuple[float | None, ...]) -> "Specialised":
+        """This table at a plugin's constant parameters (see :class:`Specialised`)."""
+        return Specialised(self, constants)
 
     def average(self, *params, data: dict | None = None):
         """G_avg for the parameters (>= 0)."""
         return self.average_grid(*params, data=None if data is None else data["average"])
+
+
+def _contract(arrays: list[np.ndarray], k: int, axis: Axis, x: float) -> list[np.ndarray]:
+    """[value, derivatives...] interpolated along stored axis k at x, and the
+    value's derivative with respect to x appended (NumPy)."""
+    i, w, dw = axis.stencil(x)
+    take = lambda a, weights: sum(wj * np.take(a, i + j, axis=k) for j, wj in enumerate(weights))
+    return [take(a, w) for a in arrays] + [take(arrays[0], dw)]
+
+
+class Specialised:
+    """A :class:`Table` at one plugin's constant parameters (``constants``: a
+    float per parameter axis, or None for a parameter that varies per lane,
+    e.g. a textured roughness). Those axes are contracted offline (NumPy):
+    their values, and the first derivatives with respect to each of them, as
+    smaller grids — so a lookup gathers 2 values per direction axis and 4 per
+    varying parameter instead of 4 per parameter. A lookup adds
+    (p - p0) dg/dp for a constant parameter p whose lane value carries a
+    gradient: the value is unchanged (p = p0), the derivative exact."""
+
+    def __init__(self, table: Table, constants: tuple[float | None, ...]):
+        self.table, self.constants = table, tuple(constants)
+        d = table.directions
+        values, average = [table.grid.stored], [table.average_grid.stored]
+        kept, kept_average = list(table.axes), list(table.axes[d:])
+        self.fixed = [j for j, c in enumerate(constants) if c is not None]
+        for j in reversed(self.fixed):              # last axes first: indices stay valid
+            values = _contract(values, d + j, kept.pop(d + j), constants[j])
+            average = _contract(average, j, kept_average.pop(j), constants[j])
+        # derivatives were appended last-axis first: back to the order of self.fixed
+        values = values[:1] + values[:0:-1]
+        average = average[:1] + average[:0:-1]
+        self.values = [Grid(tuple(kept), a, coefficients=True) for a in values]
+        self.average_grids = [Grid(tuple(kept_average), a, coefficients=True) for a in average]
+        refs = [dr.opaque(mi.Float, constants[j]) if dr.is_jit_v(mi.Float) else constants[j]
+                for j in self.fixed]
+        self.data = {"values": [g.data for g in self.values],
+                     "average": [g.data for g in self.average_grids], "refs": refs}
+
+    def _lookup(self, grids, arrays, coords, params, data):
+        varying = [p for j, p in enumerate(params) if self.constants[j] is None]
+        out = grids[0](*coords, *varying, data=data[arrays][0])
+        for n, j in enumerate(self.fixed, start=1):
+            p = params[j]
+            if dr.is_array_v(p) and dr.grad_enabled(p):
+                out = out + (p - data["refs"][n - 1]) * grids[n](*coords, *varying,
+                                                                  data=data[arrays][n])
+        return out
+
+    def __call__(self, v, params: tuple, data: dict):
+        """g at the local direction v for the model's table parameters (lanes)."""
+        return self._lookup(self.values, "values", self.table.coordinates(v), params, data)
+
+    def average(self, params: tuple, data: dict):
+        """G_avg for the model's table parameters."""
+        return self._lookup(self.average_grids, "average", [], params, data)
 
 
 class TableError(RuntimeError):

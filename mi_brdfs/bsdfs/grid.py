@@ -53,6 +53,13 @@ def bspline(t):
             (-3.0 * t2 * t + 3.0 * t2 + 3.0 * t + 1.0) / 6.0, t2 * t / 6.0)
 
 
+def bspline_derivative(t):
+    """d/dt of :func:`bspline`'s weights."""
+    s = 1.0 - t
+    return (-0.5 * s * s, 0.5 * (3.0 * t * t - 4.0 * t), 0.5 * (-3.0 * t * t + 2.0 * t + 1.0),
+            0.5 * t * t)
+
+
 def prefilter(values: np.ndarray, axis: int) -> np.ndarray:
     """The B-spline coefficients (n + 2 along ``axis``: a ghost at each end)
     that interpolate ``values`` along that axis."""
@@ -120,6 +127,31 @@ class Axis:
         a, b = self._ends()
         u = (self._forward_np(np.maximum(x, self.lo)) - a) * ((self.n - 1) / (b - a))
         return np.clip(u, 0.0, self.n - 1)
+
+    def stencil(self, x: float) -> tuple[int, np.ndarray, np.ndarray]:
+        """At one value x (NumPy): the first stored index of what interpolates
+        there, its weights, and their derivatives with respect to x (0 where
+        the coordinate is clamped at an end)."""
+        a, b = self._ends()
+        scale = (self.n - 1) / (b - a)
+        raw = (float(self._forward_np(max(float(x), self.lo))) - a) * scale
+        u = min(max(raw, 0.0), self.n - 1.0)
+        i = min(int(u), self.n - 2)
+        t = u - i
+        x = max(float(x), self.lo)
+        if not 0.0 <= raw <= self.n - 1:          # beyond the ends: the value is held
+            du = 0.0
+        elif self.warp == "sqrt":
+            du = scale * 0.5 / np.sqrt(x)
+        elif self.warp == "log1p":
+            du = scale / (1.0 + x)
+        elif self.warp == "ratio":
+            du = scale * 0.5 / (np.sqrt(x / (1.0 + x)) * (1.0 + x) ** 2)
+        else:
+            du = scale
+        if not self.smooth:
+            return i, np.array([1.0 - t, t]), np.array([-du, du])
+        return i, np.array(bspline(t)), du * np.array(bspline_derivative(t))
 
     def terms(self, x):
         """[(stored index, weight)] of what interpolates at x (Dr.Jit, per
@@ -197,6 +229,8 @@ class Grid:
 
         def along(k, offset):
             """Interpolate along axes k.. at the flat offset of axes ..k-1."""
+            if k == len(terms):                       # (a grid of no axes: one value)
+                return gather(offset)
             result = 0.0
             for i, w in terms[k]:
                 index = offset + i * self.strides[k]

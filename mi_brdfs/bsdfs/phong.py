@@ -214,5 +214,8 @@ class Phong(BRDF):
     def table_parameters(self, inp):
         return (inp.gamma,)
 
+    def table_sources(self):
+        return ("exponent",)
+
     def ms_colour(self, inp):
         return inp.m_s

@@ -332,5 +332,8 @@ class Ward(BRDF):
     def table_parameters(self, inp):
         return (inp.alpha_t, inp.alpha_b) if self.anisotropic else (inp.alpha_t,)
 
+    def table_sources(self):
+        return ("alpha_u", "alpha_v") if self.anisotropic else ("alpha",)
+
     def ms_colour(self, inp):
         return inp.m_s

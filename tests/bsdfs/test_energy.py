@@ -198,28 +198,30 @@ def test_compensated_conductor_matches_the_walk(distribution, alpha):
         assert np.all(np.abs(e - w) <= 0.03 * w + 3e-4), (f0, e.tolist(), w.tolist())
 
 
-@pytest.mark.parametrize("distribution, geometry, relative", [
-    ("blinn", "smith", 0.06), ("ggx", "cook_torrance", 12.0),
-    ("beckmann", "cook_torrance", 6.0), ("blinn", "cook_torrance", 6.0)])
-def test_other_microsurfaces_against_the_nearest_walk(distribution, geometry, relative):
+@pytest.mark.parametrize("distribution, geometry", [
+    ("blinn", "smith"), ("ggx", "cook_torrance"), ("beckmann", "cook_torrance"),
+    ("blinn", "cook_torrance")])
+def test_other_microsurfaces_against_the_nearest_walk(distribution, geometry):
     """Blinn's D and the V-cavity G have no random walk of their own; against
     the walk of the nearest Smith microsurface (Beckmann at the same α for
     Blinn, the same D for the V-cavity) the residual is the single
     scattering's own (the V-cavity reflects more than the walk at small F0:
-    there is nothing to add): bounded by what docs/guide/energy.md states.
+    there is nothing to add), within the bound docs/guide/energy.md states
+    (groundtruth.RESIDUAL_BOUND; relative, where the walk reflects >= 1 %).
     White surfaces still reflect 1 (the battery's furnace)."""
     worst = 0.0
     walk = "ggx" if distribution == "ggx" else "beckmann"
     bsdf = mi.load_dict(cook_torrance(distribution, geometry))
     params = mi.traverse(bsdf)
     for alpha in (0.3, 1.0):
-        for f0 in (0.1, 0.6, 1.0):
+        for f0 in (0.0, 0.6, 1.0):
             params["alpha.value"], params["f0"] = alpha, f0
             params.update()
             e = np.array([albedo(bsdf, t, 0.0, 256)[0] for t in THETAS_85])
             w = walk_albedo(walk, alpha, f0)
-            worst = max(worst, float(np.max(np.abs(e - w) / np.maximum(w, 0.01))))
-    assert worst <= relative
+            worst = max(worst, float(np.max(np.where(w >= 0.01, np.abs(e - w) / w, 0.0))))
+    assert worst <= groundtruth.RESIDUAL_BOUND[(distribution, geometry)]
+    assert worst > 0.02                     # (a residual there is: the bound is not vacuous)
 
 
 @pytest.mark.parametrize("distribution, alpha, theta", [
@@ -307,11 +309,18 @@ def smooth_truth(config: dict, key: str, alpha: float, wi, wo) -> np.ndarray:
     return f_single + (1 - e_i) * (1 - e_o) / (np.pi * (1 - e_avg)) * wo[:, 2]
 
 
-def roughness_derivative(config: dict, key: str, alpha: float, wi, wo) -> np.ndarray:
-    """d eval / d alpha per direction pair, by forward-mode AD through traverse."""
-    bsdf = mi.load_dict({**config, key: alpha})
+def roughness_derivative(config: dict, key: str, alpha: float, wi, wo,
+                         textured: bool = False) -> np.ndarray:
+    """d eval / d alpha per direction pair, by forward-mode AD through traverse.
+    ``textured``: the roughness as a one-texel bitmap (spatially varying: the
+    table is interpolated per lane, not specialised at load time)."""
+    value = alpha
+    if textured:
+        value = {"type": "bitmap", "bitmap": mi.Bitmap(np.full((1, 1, 1), alpha, np.float32)),
+                 "raw": True, "filter_type": "nearest"}
+    bsdf = mi.load_dict({**config, key: value})
     params = mi.traverse(bsdf)
-    name = key + ".value"
+    name = key + (".data" if textured else ".value")
     dr.enable_grad(params[name])
     params.update()
     value = bsdf.eval(mi.BSDFContext(), surface(wi), vec(wo))
@@ -319,39 +328,41 @@ def roughness_derivative(config: dict, key: str, alpha: float, wi, wo) -> np.nda
     return np.array(dr.grad(value))[0]
 
 
-@pytest.mark.parametrize("config, key, alpha", [
-    (cook_torrance("ggx"), "alpha", 0.15), (cook_torrance("ggx"), "alpha", 0.6),
-    (cook_torrance("beckmann"), "alpha", 0.3),
+@pytest.mark.parametrize("config, key, alpha, textured", [
+    (cook_torrance("ggx"), "alpha", 0.15, False), (cook_torrance("ggx"), "alpha", 0.6, False),
+    (cook_torrance("ggx"), "alpha", 0.15, True), (cook_torrance("beckmann"), "alpha", 0.3, False),
     ({"type": "ward", "diffuse_reflectance": 0.0, "specular_reflectance": 1.0,
-      "energy_compensation": True}, "alpha", 0.3)],
-    ids=["ggx-0.15", "ggx-0.6", "beckmann-0.3", "ward-0.3"])
-def test_roughness_derivative_matches_the_smooth_truth(config, key, alpha):
-    """d eval / d alpha through the compensated lobe (AD through the tables)
-    against a central difference of the smooth truth (the lobe from exact
-    albedos, no table): within 5 % per direction, where the derivative is not
-    ~0 (above 1 % of its largest value)."""
+      "energy_compensation": True}, "alpha", 0.3, False)],
+    ids=["ggx-0.15", "ggx-0.6", "ggx-0.15-textured", "beckmann-0.3", "ward-0.3"])
+def test_roughness_derivative_matches_the_smooth_truth(config, key, alpha, textured):
+    """d eval / d alpha through the compensated lobe (AD through the tables,
+    specialised at a uniform roughness or interpolated per lane for a
+    textured one) against a central difference of the smooth truth (the lobe
+    from exact albedos, no table): within 5 % per direction, where the
+    derivative is not ~0 (above 1 % of its largest value)."""
     wi, wo = direction_pairs()
     h = 2e-3 * alpha
     fd = (smooth_truth(config, key, alpha + h, wi, wo)
           - smooth_truth(config, key, alpha - h, wi, wo)) / (2 * h)
-    ad = roughness_derivative(config, key, alpha, wi, wo)
+    ad = roughness_derivative(config, key, alpha, wi, wo, textured)
     assert np.all(np.abs(ad - fd) <= 0.05 * np.abs(fd) + 0.01 * np.abs(fd).max()), \
         np.abs(ad - fd) / np.abs(fd)
 
 
-@pytest.mark.parametrize("config, axis", [
-    (cook_torrance("ggx"), "alpha"),
+@pytest.mark.parametrize("config, axis, textured", [
+    (cook_torrance("ggx"), "alpha", False), (cook_torrance("ggx"), "alpha", True),
     ({"type": "ward", "diffuse_reflectance": 0.0, "specular_reflectance": 1.0,
-      "energy_compensation": True}, "alpha")], ids=["cook_torrance", "ward"])
-def test_roughness_derivative_is_continuous_at_the_nodes(config, axis):
+      "energy_compensation": True}, "alpha", False)],
+    ids=["cook_torrance", "cook_torrance-textured", "ward"])
+def test_roughness_derivative_is_continuous_at_the_nodes(config, axis, textured):
     """Just below and just above a table node the derivative is the same (a
     multilinear table's jumped by ~18 % of its range there)."""
     from mi_brdfs.bsdfs import BY_NAME
     spec = mi.load_dict(config).albedo_spec()
     node = float(next(a for a in spec.axes if a.name == axis).nodes()[8])
     wi, wo = direction_pairs()
-    below = roughness_derivative(config, axis, node * (1 - 1e-4), wi, wo)
-    above = roughness_derivative(config, axis, node * (1 + 1e-4), wi, wo)
+    below = roughness_derivative(config, axis, node * (1 - 1e-4), wi, wo, textured)
+    above = roughness_derivative(config, axis, node * (1 + 1e-4), wi, wo, textured)
     assert np.abs(above - below).max() <= 2e-3 * np.abs(above).max()
     assert BY_NAME[config["type"]].compensable
 

@@ -5,9 +5,10 @@ A :class:`Grid` holds the values of a function at the nodes of its axes (an
 with textured parameters and are differentiable in every coordinate. An
 :class:`Axis` places its ``n`` nodes uniformly in a warped coordinate u
 (``linear``: x itself; ``sqrt``: sqrt(x), denser near ``lo``; ``log1p``:
-log(1 + x), for exponents spanning decades; ``ratio``: sqrt(x / (1 + x)),
-which maps [0, ∞] onto [0, 1] — sqrt near 0, the last node is x = ∞); values
-beyond the ends are clamped to them.
+log(1 + x), for exponents spanning decades; ``ratio``: sqrt(x / (1 + x)) and
+``root``: sqrt(x) / (1 + sqrt(x)), which map [0, ∞] onto [0, 1] — sqrt near 0,
+the last node is x = ∞, and 1 - u falls as 1/(2x) or 1/sqrt(x) towards it);
+values beyond the ends are clamped to them.
 
 Along each axis the interpolation is either linear (the default: two nodes
 per axis, a derivative that jumps at every node) or, for an axis with
@@ -41,7 +42,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-WARPS = ("linear", "sqrt", "log1p", "ratio")
+WARPS = ("linear", "sqrt", "log1p", "ratio", "root")
 
 
 def bspline(t):
@@ -88,15 +89,19 @@ class Axis:
 
     def _forward_np(self, x):
         x = np.asarray(x, dtype=np.float64)
-        if self.warp == "ratio":
+        if self.warp in ("ratio", "root"):
+            x = np.maximum(x, 0.0)
             with np.errstate(invalid="ignore"):
-                return np.where(np.isinf(x), 1.0, np.sqrt(np.maximum(x, 0.0) / (1.0 + np.maximum(x, 0.0))))
+                u = np.sqrt(x / (1.0 + x)) if self.warp == "ratio" else np.sqrt(x) / (1.0 + np.sqrt(x))
+            return np.where(np.isinf(x), 1.0, u)
         return {"linear": lambda v: v, "sqrt": np.sqrt, "log1p": np.log1p}[self.warp](x)
 
     def _inverse_np(self, u):
-        if self.warp == "ratio":
+        if self.warp in ("ratio", "root"):
             with np.errstate(divide="ignore"):
-                return np.where(u >= 1.0, np.inf, u * u / (1.0 - u * u))
+                if self.warp == "ratio":
+                    return np.where(u >= 1.0, np.inf, u * u / (1.0 - u * u))
+                return np.where(u >= 1.0, np.inf, (u / (1.0 - u)) ** 2)
         return {"linear": lambda v: v, "sqrt": np.square, "log1p": np.expm1}[self.warp](u)
 
     def _forward_dr(self, x):
@@ -107,6 +112,9 @@ class Axis:
         if self.warp == "ratio":
             x = dr.fmax(x, 0.0)
             return dr.sqrt(x / (1.0 + x))
+        if self.warp == "root":
+            r = dr.sqrt(dr.fmax(x, 0.0))
+            return r / (1.0 + r)
         return x
 
     def _ends(self) -> tuple[float, float]:
@@ -147,6 +155,8 @@ class Axis:
             du = scale / (1.0 + x)
         elif self.warp == "ratio":
             du = scale * 0.5 / (np.sqrt(x / (1.0 + x)) * (1.0 + x) ** 2)
+        elif self.warp == "root":
+            du = scale * 0.5 / (np.sqrt(x) * (1.0 + np.sqrt(x)) ** 2)
         else:
             du = scale
         if not self.smooth:

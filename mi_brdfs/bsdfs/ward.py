@@ -241,8 +241,8 @@ INF = float("inf")
 ALPHA_AXIS = Axis("alpha", 0.0, INF, 33, "ratio", smooth=True)
 ISOTROPIC_AXES = (Axis("mu", 0.0, 1.0, 33, "sqrt"), ALPHA_AXIS)
 ANISOTROPIC_AXES = (Axis("mu", 0.0, 1.0, 25, "sqrt"), Axis("sin2phi", 0.0, 1.0, 9),
-                    Axis("alpha_u", 0.0, INF, 21, "ratio", smooth=True),
-                    Axis("alpha_v", 0.0, INF, 21, "ratio", smooth=True))
+                    Axis("alpha_u", 0.0, INF, 25, "ratio", smooth=True),
+                    Axis("alpha_v", 0.0, INF, 25, "ratio", smooth=True))
 
 
 def _clamped(f):
@@ -255,7 +255,7 @@ ISOTROPIC = energy.AlbedoSpec(
     f=_clamped(lambda wi, wo, a: specular_vectors(wi, wo, a, a)),
     sample=_clamped(lambda wi, u, a: sample_lobe(wi, u, a, a)),
     pdf=_clamped(lambda wi, wo, a: pdf_specular(wi, wo, a, a)))
-ANISOTROPIC = energy.AlbedoSpec(                  # 99,225 nodes: 128² samples (~1 min)
+ANISOTROPIC = energy.AlbedoSpec(                  # 140,625 nodes: 128² samples (~1 min)
     "ward/anisotropic", ANISOTROPIC_AXES, f=_clamped(specular_vectors),
     sample=_clamped(sample_lobe), pdf=_clamped(pdf_specular), samples=128)
 

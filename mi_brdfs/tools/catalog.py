@@ -380,7 +380,7 @@ def _cook_torrance() -> Entry:
                      "specular_reflectance": 1.0, "energy_compensation": True}))
     for d in ("beckmann", "ggx"):                  # the roughness they accept beyond 1
         for g in GEOMETRIES:
-            for a in (1.5, 3.0, 10.0):
+            for a in (1.5, 3.0, 10.0, 30.0, 1e3):
                 furnace.append(preserves(
                     f"compensated, {d}, {g}, α = {a} (beyond 1)",
                     {**c, "distribution": d, "geometry": g, "alpha": a, "k": 0.0, "f0": 1.0,

@@ -40,6 +40,14 @@ anisotropic by stretching, which the tables do not need.
 
     albedo("ggx", mu, alpha, f0s, paths)      # E(μ) of the walk, per F0
     brdf("ggx", wi, wo, alpha, f0, paths)     # f·cos θ_o by next-event estimation
+
+Used by ``python -m mi_brdfs.tools.tables`` (the walk tables), the tests, and
+the validation report (:func:`report_section`). As a command:
+
+    python -m mi_brdfs.tools.groundtruth -o tests/bsdfs/walk_reference.json   # reference albedos
+    python -m mi_brdfs.tools.groundtruth --reference FILE --residuals  # compensation vs the walk
+    python -m mi_brdfs.tools.groundtruth --slices          # BRDF slices vs the walk
+    python -m mi_brdfs.tools.groundtruth --decomposition   # separable, height-correlated, k >= 2
 """
 from __future__ import annotations
 
@@ -53,8 +61,8 @@ DISTRIBUTIONS = ("ggx", "beckmann")
 UP = 0.9999            # the code's |w.z| beyond which a direction is the normal itself
 FLAT = 1e-4            # the code's |w.z| below which a ray stays at its height
 H_START = 1.998        # 1 + invC1(0.999): above the microsurface (C1 = 1)
-MAX_ORDER = 1000       # bounces after which a path still inside is dropped (never reached
-#                        in the tables: ~1e-9 of the paths pass 100 bounces at alpha = 4)
+MAX_ORDER = 1000       # bounces after which a path still inside is dropped (the tables
+#                        walk alpha <= 9; a white walk keeps every path: tested at alpha 3)
 SQRT_PI = math.sqrt(math.pi)
 
 
@@ -463,7 +471,7 @@ REPORT_CASES = ((0.3, 0.3), (0.3, 1.0), (1.0, 0.3), (1.0, 1.0))     # (alpha, F0
 # show against the walk of its nearest Smith microsurface, alpha <= 1, F0 in [0, 1],
 # 0-85°: 3 % for Smith G (the goal); Blinn's and the V-cavity's own single
 # scattering differ more (measured with python -m mi_brdfs.tools.groundtruth
-# --reference tests/bsdfs/walk_reference.json --residuals: 1.2 %, 2.1 %, 9.1 %,
+# --reference tests/bsdfs/walk_reference.json --residuals: 1.4 %, 2.0 %, 8.8 %,
 # 318 %, 160 %, 127 %; the V-cavity's worst at F0 = 0, 85°, where its single
 # scattering alone reflects more than the walk).
 RESIDUAL_BOUND = {("ggx", "smith"): 0.03, ("beckmann", "smith"): 0.03,
@@ -474,9 +482,9 @@ RESIDUAL_BOUND = {("ggx", "smith"): 0.03, ("beckmann", "smith"): 0.03,
 def report_section(out: str, quick: bool = False, log=None) -> list[dict]:
     """Every compensated cook_torrance D x G against the random walk of its
     nearest Smith microsurface: albedo against angle (compensated and single
-    scattering, white m_S, k = 0, at REPORT_CASES) and, for GGX and Beckmann,
-    BRDF slices in the plane of incidence. Writes one figure per D x G and
-    one of slices; returns a row per D x G with its largest differences."""
+    scattering, white m_S, k = 0, at REPORT_CASES) and BRDF slices in the
+    plane of incidence (α 0.6, F0 0.6). Writes one figure per D x G and one
+    of slices; returns a row per D x G with its largest differences."""
     from matplotlib.figure import Figure    # no pyplot: no global backend change
     import mitsuba as mi
 
@@ -521,29 +529,37 @@ def report_section(out: str, quick: bool = False, log=None) -> list[dict]:
                          "paths": paths, "plot": plot})
             if log:
                 log(f"ground truth: {distribution}/{geometry}")
-    # BRDF slices (f·cos θ_o in the plane of incidence), Smith G
-    fig = Figure(figsize=(8.4, 3.2), dpi=100)
-    axes = fig.subplots(1, 2)
-    for ax, distribution in zip(axes, ("ggx", "beckmann")):
-        config = {"type": "cook_torrance", "distribution": distribution, "geometry": "smith",
+    # BRDF slices (f·cos θ_o in the plane of incidence): every D x G against the
+    # walk of its nearest Smith microsurface (one walk per Smith distribution)
+    fig = Figure(figsize=(11.0, 6.4), dpi=100)
+    axes = fig.subplots(2, 3)
+    slice_thetas, n = (30, 70), 61
+    walked = {}
+    for smith in DISTRIBUTIONS:
+        for theta in slice_thetas:
+            t = math.radians(theta)
+            theta_o = np.radians(np.linspace(-89.5, 89.5, n))
+            wo = np.stack([np.sin(theta_o), np.zeros(n), np.cos(theta_o)], axis=1)
+            wi = np.repeat(np.array([[-math.sin(t), 0.0, math.cos(t)]]), n, axis=0)
+            walked[smith, theta] = brdf(smith, wi, wo, 0.6, 0.6, paths=paths // 4, seed=9)
+    for ax, (distribution, geometry) in zip(axes.ravel(), [
+            (d, g) for g in ("smith", "cook_torrance") for d in ("ggx", "beckmann", "blinn")]):
+        smith = "ggx" if distribution == "ggx" else "beckmann"
+        config = {"type": "cook_torrance", "distribution": distribution, "geometry": geometry,
                   "alpha": 0.6, "k": 0.0, "f0": 0.6, "specular_reflectance": 1.0}
-        for k, theta in enumerate((30, 70)):
+        for k, theta in enumerate(slice_thetas):
             theta_o, comp = plane_of_incidence(
-                mi.load_dict({**config, "energy_compensation": True}), theta, 61)
-            _, single = plane_of_incidence(mi.load_dict(config), theta, 61)
-            t = np.radians(theta)
-            wi = np.array([-np.sin(t), 0.0, np.cos(t)])
-            wo = np.stack([np.sin(theta_o), np.zeros_like(theta_o), np.cos(theta_o)], axis=1)
-            walked = brdf(distribution, np.repeat(wi[None], len(wo), axis=0), wo, 0.6, 0.6,
-                          paths=paths // 4, seed=9)
+                mi.load_dict({**config, "energy_compensation": True}), theta, n)
+            _, single = plane_of_incidence(mi.load_dict(config), theta, n)
             deg = np.degrees(theta_o)
-            ax.plot(deg, walked, "-", color=f"C{k}", lw=2.5, alpha=0.4, label=f"walk, θ_i {theta}°")
+            ax.plot(deg, walked[smith, theta], "-", color=f"C{k}", lw=2.5, alpha=0.4,
+                    label=f"walk ({smith}), θ_i {theta}°")
             ax.plot(deg, comp, "--", color=f"C{k}", label=f"compensated, θ_i {theta}°")
             ax.plot(deg, single, ":", color=f"C{k}", lw=1, label=f"single, θ_i {theta}°")
-        ax.set_title(f"{distribution}/smith, α 0.6, F0 0.6", fontsize=9)
-        ax.set_xlabel("θ_o in the plane of incidence (degrees; > 0: mirror side)")
-        ax.set_ylabel("f·cos θ_o")
-        ax.legend(fontsize=6)
+        ax.set_title(f"{distribution}/{geometry}, α 0.6, F0 0.6", fontsize=9)
+        ax.set_xlabel("θ_o in the plane of incidence (°; > 0: mirror side)", fontsize=8)
+        ax.set_ylabel("f·cos θ_o", fontsize=8)
+        ax.legend(fontsize=5.5)
     fig.tight_layout()
     fig.savefig(os.path.join(out, "groundtruth_slices.png"))
     return rows
@@ -569,19 +585,22 @@ def report_html(rows: list[dict]) -> str:
                      f"<td>{r['paths']}</td></tr>")
     parts.append("</table><div class='figs'>" + "".join(
         f"<img src='{esc(r['plot'])}' alt='ground truth'>" for r in rows)
-        + "<img src='groundtruth_slices.png' alt='BRDF slices'></div>")
+        + "<img src='groundtruth_slices.png' alt='BRDF slices'></div><p>BRDF slices: "
+        "f·cos θ_o in the plane of incidence, the walk's by next-event estimation; the "
+        "compensation lobe is separable, the walk's multiple scattering is not, and the "
+        "separable G1·G1 shapes the single scattering (as Mitsuba's roughconductor).</p>")
     return "".join(parts)
 
 
-def slice_difference(distribution: str, alpha: float, theta: float, f0: float,
+def slice_difference(distribution: str, geometry: str, alpha: float, theta: float, f0: float,
                      paths: int = 20_000, n: int = 41) -> tuple[float, float]:
-    """Relative L1 difference over the plane of incidence between the walk's
-    BRDF and compensated / single-scattering cook_torrance (Smith G, white
-    m_S, k = 0): (compensated, single)."""
+    """Relative L1 difference over the plane of incidence between the BRDF of
+    the walk (on the nearest Smith microsurface) and compensated /
+    single-scattering cook_torrance (white m_S, k = 0): (compensated, single)."""
     import mitsuba as mi
 
     from .analysis import plane_of_incidence
-    config = {"type": "cook_torrance", "distribution": distribution, "geometry": "smith",
+    config = {"type": "cook_torrance", "distribution": distribution, "geometry": geometry,
               "alpha": alpha, "k": 0.0, "f0": f0, "specular_reflectance": 1.0}
     theta_o, comp = plane_of_incidence(mi.load_dict({**config, "energy_compensation": True}),
                                        theta, n)
@@ -589,7 +608,8 @@ def slice_difference(distribution: str, alpha: float, theta: float, f0: float,
     t = math.radians(theta)
     wi = np.repeat(np.array([[-math.sin(t), 0.0, math.cos(t)]]), n, axis=0)
     wo = np.stack([np.sin(theta_o), np.zeros(n), np.cos(theta_o)], axis=1)
-    walked = brdf(distribution, wi, wo, alpha, f0, paths=paths, seed=2)
+    walked = brdf("ggx" if distribution == "ggx" else "beckmann", wi, wo, alpha, f0,
+                  paths=paths, seed=2)
     return (float(np.abs(comp - walked).sum() / walked.sum()),
             float(np.abs(single - walked).sum() / walked.sum()))
 
@@ -637,13 +657,15 @@ def main(argv: list[str] | None = None) -> int:
             return 0
     if args.slices:
         import mi_brdfs  # noqa: F401  (variant, plugins)
-        for distribution in DISTRIBUTIONS:
-            for alpha in (0.3, 0.6, 1.0):
-                for theta in (30, 60):
-                    comp, single = slice_difference(distribution, alpha, theta, 0.6)
-                    print(f"{distribution}/smith, alpha {alpha}, F0 0.6, theta_i {theta} deg: "
-                          f"plane-of-incidence slice vs the walk, relative L1: compensated "
-                          f"{100 * comp:.1f} %, single scattering {100 * single:.1f} %")
+        for geometry in ("smith", "cook_torrance"):
+            for distribution in ("ggx", "beckmann", "blinn"):
+                for alpha in (0.3, 0.6, 1.0):
+                    for theta in (30, 60):
+                        comp, single = slice_difference(distribution, geometry, alpha, theta, 0.6)
+                        print(f"{distribution}/{geometry}, alpha {alpha}, F0 0.6, theta_i "
+                              f"{theta} deg: plane-of-incidence slice vs the walk, relative "
+                              f"L1: compensated {100 * comp:.1f} %, single scattering "
+                              f"{100 * single:.1f} %")
         if not (args.output or args.residuals):
             return 0
     if args.reference:

@@ -53,9 +53,14 @@ A model subclasses :class:`BRDF` and supplies:
 ``sample_specular(inp, si, sample2)``, ``pdf_specular(inp, si, wo)``
     the glossy lobe's sampler and its density;
 
-and, if ``compensable``: ``ms_colour(inp)`` and either ``albedo_spec()`` and
-``table_parameters(inp)`` (a tabulated albedo, :mod:`.energy`) or
-``albedo(inp, v)`` and ``albedo_average(inp)`` (an analytic one).
+and, if ``compensable`` (:mod:`.energy`): ``ms_colour(inp)``, the colour C
+that scales the multiple-scattering lobe, and either ``compensation()`` (an
+:class:`.energy.Table` of its albedo g per unit colour), ``table_parameters(inp)``
+and ``table_sources()`` (the parameter each comes from), or ``ms_albedo(inp, v)``
+and ``ms_average(inp)`` (an analytic g). The base specialises the table at the
+parameters that are constant over the surface (at load time and at every
+update) and holds its Dr.Jit arrays as the member ``m_ms``, so that Dr.Jit
+traverses them with the plugin (frozen functions).
 """
 from __future__ import annotations
 
@@ -385,6 +390,11 @@ T = mi.Properties.Type
 NUMBERS = (T.Float, T.Integer)
 
 
+def to_float(x) -> float:
+    """A Python float from an opaque Float (JIT variants) or a float (scalar ones)."""
+    return float(x[0]) if dr.is_array_v(x) else float(x)
+
+
 class Reader:
     """Reads one plugin's properties and raises ParameterError on bad values.
 
@@ -610,7 +620,7 @@ class State:
 
 
 STATE = ("params", "live", "diffuse", "specular", "multiple", "diffuse_index",
-         "specular_index", "energy_compensation", "plan", "switches")   # what the base keeps
+         "specular_index", "energy_compensation", "plan", "switches", "ms_table")   # what the base keeps
 
 
 class BRDF:
@@ -785,25 +795,50 @@ class BRDF:
         return self.f_specular(inp, si, wo), self.pdf_specular(inp, si, wo)
 
     def albedo_spec(self) -> energy.AlbedoSpec | None:
-        """The :class:`.energy.AlbedoSpec` whose table holds this instance's
-        single-scattering albedo (None: a model with an analytic one)."""
+        """The :class:`.energy.AlbedoSpec` of this instance's single-scattering
+        albedo (None: a model with an analytic one)."""
         return None
+
+    def compensation(self) -> energy.Table | None:
+        """The table of the multiple-scattering lobe's albedo g per unit colour
+        (default: 1 - E of :meth:`albedo_spec`; None: an analytic g)."""
+        spec = self.albedo_spec()
+        return None if spec is None else energy.complement(spec)
 
     def table_parameters(self, inp) -> tuple:
         """The model parameters of that table's axes, evaluated (``inp``)."""
         raise NotImplementedError
 
-    def albedo(self, inp, v):
-        """Single-scattering directional albedo of the compensated lobe per unit
-        colour, at direction v (local), for :mod:`.energy`."""
-        return energy.table(self.albedo_spec())(v, *self.table_parameters(inp))
+    def table_sources(self) -> tuple[str, ...]:
+        """The name of the parameter each table parameter comes from."""
+        raise NotImplementedError
 
-    def albedo_average(self, inp):
-        """Its cosine-weighted hemispherical average."""
-        return energy.table(self.albedo_spec()).average(*self.table_parameters(inp))
+    def specialise_compensation(self) -> None:
+        """The compensation table at the parameters constant over the surface
+        (plain numbers and uniform textures, evaluated once here), its arrays
+        held as the member ``m_ms``."""
+        table = self.compensation()
+        if table is None:
+            return
+        inp = self.evaluate(dr.zeros(mi.SurfaceInteraction3f), True)
+        constants = tuple(
+            None if isinstance(obj, mi.Object) and obj.is_spatially_varying() else to_float(x)
+            for obj, x in zip((getattr(self, "m_" + n) for n in self.table_sources()),
+                              self.table_parameters(inp)))
+        self.ms_table = table.specialise(constants)
+        self.m_ms = self.ms_table.data               # traversed with the plugin
+
+    def ms_albedo(self, inp, v):
+        """g(v): the directional albedo of the multiple-scattering lobe per unit
+        colour, at direction v (local)."""
+        return self.ms_table(v, self.table_parameters(inp), self.m_ms)
+
+    def ms_average(self, inp):
+        """G_avg: its cosine-weighted hemispherical average."""
+        return self.ms_table.average(self.table_parameters(inp), self.m_ms)
 
     def ms_colour(self, inp):
-        """The per-bounce colour of the compensated lobe (see :func:`.energy.ms_colour`)."""
+        """The colour C scaling the multiple-scattering lobe (see :mod:`.energy`)."""
         raise NotImplementedError
 
     def diffuse_sampling(self) -> str:
@@ -839,6 +874,8 @@ class BRDF:
             flags |= c
         self.m_components = components
         self.m_flags = flags
+        if self.multiple:
+            self.specialise_compensation()
         self.plan = Plan(Lobes(self.diffuse, self.specular, self.multiple),
                          self.mode == "scanline", self.sampling == "cosine",
                          self.diffuse_sampling() == "uniform", self.lit_from_behind())
@@ -848,7 +885,9 @@ class BRDF:
         flags: the plan and the parameters folded as numbers. A frozen
         function keys on it (:mod:`mi_brdfs.render.frozen`): a change
         re-records instead of replaying stale code."""
-        return self.plan, tuple(sorted(self.switches.items()))
+        table = getattr(self, "ms_table", None) if self.multiple else None
+        fixed = tuple(table.fixed) if table is not None else ()
+        return self.plan, tuple(sorted(self.switches.items())), fixed
 
     def enabled(self, ctx) -> Lobes:
         """The lobes that exist and that ctx asks for."""
@@ -862,13 +901,13 @@ class BRDF:
         """Everything a call needs at ``si``, each texture evaluated once."""
         inp = self.evaluate(si, active)
         if self.multiple:
-            inp.e_i = self.albedo(inp, si.wi)                 # E(w_i)
-            inp.e_avg = self.albedo_average(inp)              # E_avg
-            inp.f_ms = energy.ms_colour(self.ms_colour(inp), inp.e_avg)
+            inp.g_i = self.ms_albedo(inp, si.wi)              # g(w_i)
+            inp.g_avg = self.ms_average(inp)                  # G_avg
+            inp.f_ms = self.ms_colour(inp)                    # C
         return inp
 
     def f_multiple(self, inp, si, wo):
-        return energy.ms_lobe(inp.f_ms, inp.e_i, self.albedo(inp, wo), inp.e_avg,
+        return energy.ms_lobe(inp.f_ms, inp.g_i, self.ms_albedo(inp, wo), inp.g_avg,
                               mi.Frame3f.cos_theta(wo))
 
     def probabilities(self, inp, si, use: Lobes):
@@ -881,7 +920,7 @@ class BRDF:
         w_ms = mi.Float(0.0)
         if use.multiple:
             w = self.lobe_weights(inp)[0 if self.compensates == "diffuse" else 1]
-            w_ms = w * mean(inp.f_ms) * (1.0 - inp.e_i)
+            w_ms = w * mean(inp.f_ms) * inp.g_i
         weights = [dr.select(u, w, 0.0) if u else mi.Float(0.0)
                    for u, w in zip(use, (w_d, w_s, w_ms))]
         total = weights[0] + weights[1] + weights[2]

@@ -24,12 +24,16 @@ is no diffuse lobe, with k = 1 (or m_S = 0) no specular one.
 
 **Energy compensation** (``energy_compensation``): the reciprocal
 multiple-scattering lobe of Kulla & Conty 2017 / Turquin 2019
-(:mod:`mi_brdfs.bsdfs.energy`) returns the light that bounces between the
-facets, so that a white surface (F0 = 1, m_S = 1; and m_D = 1 if k > 0)
-reflects 1 at every incident angle. Per-bounce colour m_S·F_avg (F_avg the
-cosine-weighted average of Schlick's F), so coloured conductors saturate
-instead of greying; with k > 0 the albedo is k·m_D + (1 - k)·(the
-compensated specular). E(μ, α) is tabulated per D × G with F = 1.
+(:mod:`mi_brdfs.bsdfs.energy`) whose albedo is what single scattering misses
+of the random walk on the Smith microsurface (Heitz, Hanika, d'Eon &
+Dachsbacher 2016) with Schlick's F at every bounce, tabulated over
+(cos θ, α, F0) for every α (to ∞): the specular lobe reflects m_S·W(θ, α, F0),
+W the walk's albedo (within 1.4 % for GGX and 2.0 % for Beckmann with Smith
+G; Blinn's D and the V-cavity against the walk of the nearest Smith
+microsurface, see ``docs/guide/energy.md``). A white surface (F0 = 1,
+m_S = 1; and m_D = 1 if k > 0) reflects 1 at every angle, and m_S scales it
+linearly, as ``roughconductor``'s ``specular_reflectance``; with k > 0 the
+albedo is k·m_D + (1 - k)·(the compensated specular).
 
 .. code-block:: xml
 
@@ -131,17 +135,46 @@ def pdf_lobe(wi, wo, alpha, distribution: str, visible: bool = True):
 #  The plugin
 # ----------------------------------------------------------------------------
 
-# Energy compensation: E(mu, alpha) of each D x G, white (F = 1, m_S = 1).
-ALBEDO_AXES = (Axis("mu", 0.0, 1.0, 33, "sqrt"), Axis("alpha", 0.0, 1.0, 33, "sqrt"))
+# Energy compensation (:mod:`.energy`): the single-scattering albedo of each
+# D x G with F = 1 and with F0 = 0 (E_ss is linear in F0) over (mu, alpha), and
+# the random walk's W over (mu, alpha, F0) of the Smith microsurfaces. alpha
+# reaches infinity (Blinn's alpha <= 1: its tables extrapolate beyond).
+MU_AXIS = Axis("mu", 0.0, 1.0, 33, "sqrt")
+# (the "root" warp: nodes between alpha 10 and 1000 follow the V-cavity's late
+# fall at grazing angles, E(85°) = 0.46, 0.12, 0.013 at alpha 10, 30, 100)
+ALPHA_AXIS = Axis("alpha", 0.0, float("inf"), 57, "root", smooth=True)
+F0_AXIS = Axis("f0", 0.0, 1.0, 25, smooth=True)
+ALBEDO_AXES = (MU_AXIS, ALPHA_AXIS)
+WALK_AXES = (MU_AXIS, ALPHA_AXIS, F0_AXIS)
+# The Smith microsurface whose random walk is the truth for each D (Blinn's
+# exponent 2/alpha² - 2 is Walter's mapping onto Beckmann at the same alpha).
+WALK_DISTRIBUTION = {"ggx": "ggx", "beckmann": "beckmann", "blinn": "beckmann"}
 
 
-def spec(distribution: str, geometry: str) -> energy.AlbedoSpec:
-    alpha = lambda a: dr.fmax(a, mf.ALPHA_MIN)
+def spec(distribution: str, geometry: str, f0: float = 1.0) -> energy.AlbedoSpec:
+    """The single-scattering albedo table of D x G with Schlick's F0 (1 or 0);
+    Blinn's beyond alpha = 1 extrapolated (its alpha <= 1)."""
+    hi = 1.0 if distribution == "blinn" else float("inf")
+    alpha = lambda a: dr.fmin(dr.fmax(a, mf.ALPHA_MIN), hi)
+    name = f"cook_torrance/{distribution}/{geometry}" + ("" if f0 == 1.0 else f"/f0={f0:g}")
     return energy.AlbedoSpec(
-        f"cook_torrance/{distribution}/{geometry}", ALBEDO_AXES,
-        f=lambda wi, wo, a: specular(wi, wo, alpha(a), 1.0, distribution, geometry),
+        name, ALBEDO_AXES,
+        f=lambda wi, wo, a: specular(wi, wo, alpha(a), f0, distribution, geometry),
         sample=lambda wi, u, a: sample_lobe(wi, u, alpha(a), distribution),
-        pdf=lambda wi, wo, a: pdf_lobe(wi, wo, alpha(a), distribution))
+        pdf=lambda wi, wo, a: pdf_lobe(wi, wo, alpha(a), distribution),
+        valid_up_to=None if distribution != "blinn" else 1.0)
+
+
+def walk_spec(distribution: str) -> energy.WalkSpec:
+    """The random walk's albedo table of the Smith microsurface nearest to D."""
+    smith = WALK_DISTRIBUTION[distribution]
+    return energy.WalkSpec(f"walk/{smith}", smith, WALK_AXES)
+
+
+def compensation(distribution: str, geometry: str) -> energy.Table:
+    """g(mu, alpha, F0) = W - E_ss (see :func:`.energy.microfacet`)."""
+    return energy.microfacet(spec(distribution, geometry), spec(distribution, geometry, 0.0),
+                             walk_spec(distribution))
 
 
 class CookTorrance(BRDF):
@@ -178,10 +211,13 @@ class CookTorrance(BRDF):
             if p.name == "alpha" and self.distribution == "blinn":
                 p = replace(p, hi=1.0)                       # Blinn: 2/rho² - 2 >= 0
             self.read_param(reader, p)
+        if self.distribution == "blinn" and self.geometry == "smith":
+            self.m_g1_blinn = mf.g1_blinn_grid().data        # traversed: frozen functions
 
     @classmethod
-    def albedo_specs(cls) -> list[energy.AlbedoSpec]:
-        return [spec(d, g) for d in mf.DISTRIBUTIONS for g in mf.GEOMETRIES]
+    def albedo_specs(cls) -> list:
+        return ([spec(d, g, f0) for d in mf.DISTRIBUTIONS for g in mf.GEOMETRIES
+                 for f0 in (1.0, 0.0)] + [walk_spec(d) for d in ("ggx", "beckmann")])
 
     # --- lobes ---------------------------------------------------------------
     def has_diffuse(self) -> bool:
@@ -234,8 +270,14 @@ class CookTorrance(BRDF):
     def albedo_spec(self) -> energy.AlbedoSpec:
         return spec(self.distribution, self.geometry)
 
+    def compensation(self) -> energy.Table:
+        return compensation(self.distribution, self.geometry)
+
     def table_parameters(self, inp):
-        return (inp.alpha,)
+        return (inp.alpha, self.m_f0)
+
+    def table_sources(self):
+        return ("alpha", "f0")
 
     def ms_colour(self, inp):
-        return inp.m_s * mf.fresnel_average(self.m_f0)
+        return inp.m_s

@@ -57,9 +57,9 @@ H_NORM2_MIN = 1e-30         # |h|² floor: 0 only for wi = -wo (|wi + wo| < 2e-3
 
 
 def half_vector(wi, wo):
-    """normalize(wi + wo), exact for |wi + wo| from 2e-34 to 2: the sum is
-    scaled by 2^62 first, so that its squared length neither underflows (two
-    directions above the horizon, cos θ > 1e-20, have |wi + wo| > 2e-20) nor
+    """normalize(wi + wo), exact for a length of wi + wo from 2e-34 to 2: the
+    sum is scaled by 2^62 first, so that its squared length neither underflows
+    (two directions above the horizon, cos θ > 1e-20, have a sum longer than 2e-20) nor
     overflows. The zero vector (wo = -wi) stays 0, with no NaN in values or
     derivatives."""
     x, y, z = (wi.x + wo.x) * H_SCALE, (wi.y + wo.y) * H_SCALE, (wi.z + wo.z) * H_SCALE
@@ -125,12 +125,6 @@ def fresnel_schlick(f0, cos_theta):
     m = 1.0 - dr.fmin(dr.fmax(cos_theta, 0.0), 1.0)
     m2 = m * m
     return f0 + (1.0 - f0) * (m2 * m2 * m)
-
-
-def fresnel_average(f0):
-    """Schlick's F averaged over the hemisphere, cosine-weighted:
-    2 ∫ F(μ) μ dμ = F0 + (1 - F0)/21 (Kulla & Conty's F_avg)."""
-    return f0 + (1.0 - f0) / 21.0
 
 
 def g_cook_torrance(cos_h, cos_i, cos_o, i_dot_h):
@@ -246,21 +240,28 @@ G1_BLINN_VALUES = _g1_blinn_table()
 _g1_blinn_grids: dict[str, Grid] = {}
 
 
+def g1_blinn_grid() -> Grid:
+    """The table of the Blinn G1 for the active variant (a plugin that uses it
+    holds its ``data`` as a member, so that frozen functions see it)."""
+    variant = mi.variant()
+    if variant not in _g1_blinn_grids:
+        _g1_blinn_grids[variant] = Grid(G1_BLINN_AXES, G1_BLINN_VALUES)
+    return _g1_blinn_grids[variant]
+
+
 def g1_blinn_over_cos(v, alpha):
     """G1(v) / cos θ_v for the Blinn distribution, from :data:`G1_BLINN_VALUES`.
     Near the horizon G1 ~ c · g'(0), so G1/c is taken from the first cell's
     slope there (no division by a tiny c)."""
-    variant = mi.variant()
-    if variant not in _g1_blinn_grids:
-        _g1_blinn_grids[variant] = Grid(G1_BLINN_AXES, G1_BLINN_VALUES)
+    grid = g1_blinn_grid()
     c = dr.fmax(v.z, 0.0)
     rs = dr.fmax(alpha * sin_theta(v), TINY)
     t = c / (c + rs)                                   # a/(1 + a), a = c/(rho s)
-    g1 = _g1_blinn_grids[variant](t, dr.fmin(alpha, 1.0))
+    g1 = grid(t, dr.fmin(alpha, 1.0))
     # In the first cell g1 is linear in t: g1/c = (g1/t)(t/c) = (g1/t)/(c + rs)
     h = 1.0 / (G1_BLINN_AXES[0].n - 1)
     first = t < h
-    g1_over_t = dr.select(first, _g1_blinn_grids[variant](mi.Float(h), dr.fmin(alpha, 1.0)) / h,
+    g1_over_t = dr.select(first, grid(mi.Float(h), dr.fmin(alpha, 1.0)) / h,
                           g1 / dr.select(first, 1.0, t))
     return g1_over_t / (c + rs)
 

@@ -60,8 +60,9 @@ the energy-preserving Oren-Nayar model EON (Portsmouth, Kutz & Hill, JCGT
 the diffuse lobe of OpenPBR, MaterialX and Cycles; a white surface reflects 1
 at every angle. Its roughness is r = B(σ)/A(σ) (the lecture's A, B: the ratio
 of the retro-reflective term to the Lambertian one, Fujii's mixing ratio), so
-σ in [0, π/2] maps to r in [0, 0.776] and σ = 0 stays Lambert. Per-bounce
-colour m_D.
+σ in [0, π/2] maps to r in [0, 0.776] and σ = 0 stays Lambert. Its colour
+enters as the paper defines it, per bounce (ρ_ms = m_D² E_avg /
+(1 - m_D (1 - E_avg))), not linearly: the one exception to linear colours.
 
 .. code-block:: xml
 
@@ -81,6 +82,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from . import energy
 from .base import BRDF, Option, Param, Reader, Scaled
 from .grid import Axis, Grid
 
@@ -251,14 +253,15 @@ class OrenNayar(BRDF):
         return oren_nayar(inp.m_d, inp.sigma, g, sa_tb, cos_o, self.mode)
 
     # --- energy compensation (EON) ------------------------------------------------
-    def albedo(self, inp, v):
-        return fon_albedo(mi.Frame3f.cos_theta(v), inp.r)
+    def ms_albedo(self, inp, v):
+        return 1.0 - fon_albedo(mi.Frame3f.cos_theta(v), inp.r)
 
-    def albedo_average(self, inp):
-        return fon_albedo_average(inp.r)
+    def ms_average(self, inp):
+        return 1.0 - fon_albedo_average(inp.r)
 
     def ms_colour(self, inp):
-        return inp.m_d
+        # EON's rho_ms: rho enters as the paper defines it, not linearly
+        return energy.ms_series(inp.m_d, fon_albedo_average(inp.r))
 
     def describe(self) -> dict:
         fields = BRDF.describe(self)

@@ -36,12 +36,12 @@ albedo at normal incidence against the diffuse one: m_S vs m_D in hdr mode,
 2 m_S/(gamma + 1) vs m_D in scanline mode (channel means). With m_D = 0 there
 is no diffuse lobe, with m_S = 0 no specular one.
 
-**Energy compensation** (``energy_compensation``): the reciprocal
-multiple-scattering lobe of Kulla & Conty 2017 / Turquin 2019
-(:mod:`mi_brdfs.bsdfs.energy`) returns what the lobe loses below the
-horizon, so that a white lobe (m_S = 1) reflects 1 at every incident angle.
-Per-bounce colour m_S. E(μ, γ) is tabulated from the hdr lobe above over
-cos θ and log(1 + γ), γ in [0, 1e8].
+**Energy compensation** (``energy_compensation``): the reciprocal lobe of
+Kulla & Conty 2017 / Turquin 2019 (:mod:`mi_brdfs.bsdfs.energy`) returns
+what the lobe loses below the horizon (g = 1 - E), so that the specular lobe
+reflects m_S at every incident angle: m_S scales it linearly. E(μ, γ) is
+tabulated from the hdr lobe above over cos θ and log(1 + γ), γ in [0, 1e8],
+smooth (C2) in γ.
 
 .. code-block:: xml
 
@@ -116,7 +116,8 @@ def pdf_lobe(wi, wo, gamma):
 # ----------------------------------------------------------------------------
 
 # Energy compensation: E(mu, gamma) of the hdr lobe (m_S = 1), over log(1 + gamma).
-ALBEDO_AXES = (Axis("mu", 0.0, 1.0, 33, "sqrt"), Axis("exponent", 0.0, MAX_EXPONENT, 49, "log1p"))
+ALBEDO_AXES = (Axis("mu", 0.0, 1.0, 33, "sqrt"),
+               Axis("exponent", 0.0, MAX_EXPONENT, 49, "log1p", smooth=True))
 
 
 class Phong(BRDF):
@@ -189,6 +190,9 @@ class Phong(BRDF):
 
     def table_parameters(self, inp):
         return (inp.gamma,)
+
+    def table_sources(self):
+        return ("exponent",)
 
     def ms_colour(self, inp):
         return inp.m_s

@@ -55,11 +55,12 @@ tan²delta is exponential with rate A(phi) = cos²phi/a_t² + sin²phi/a_b²)::
 and wo = reflect(w_r, h) has p(wo) = p_h(h) / (4 wo·h). The lobe is picked in
 proportion to mean(m_D) (pi·mean(m_D) in scanline mode) vs mean(m_S).
 
-**Energy compensation** (``energy_compensation``): the reciprocal
-multiple-scattering lobe of Kulla & Conty 2017 / Turquin 2019
-(:mod:`mi_brdfs.bsdfs.energy`), so that a white lobe (m_S = 1) reflects 1 at
-every incident angle. Per-bounce colour m_S. E is tabulated from the hdr lobe
-over (cos θ, α) when isotropic and (cos θ, sin²φ, α_u, α_v) when anisotropic;
+**Energy compensation** (``energy_compensation``): the reciprocal lobe of
+Kulla & Conty 2017 / Turquin 2019 (:mod:`mi_brdfs.bsdfs.energy`) returns
+what the lobe loses below the horizon (g = 1 - E), so that the specular lobe
+reflects m_S at every incident angle (m_S scales it linearly). E is
+tabulated from the hdr lobe over (cos θ, α) when isotropic and (cos θ,
+sin²φ, α_u, α_v) when anisotropic, α to ∞, smooth (C2) in the roughness;
 where Ward's own albedo exceeds 1 (within a fraction of a degree of the
 horizon) E is clamped to 1: nothing is added there.
 
@@ -191,11 +192,14 @@ def sample_lobe(wi, sample2, alpha_t, alpha_b):
 
 
 # Energy compensation: E of the specular lobe (m_S = 1) over (mu, alpha) when
-# isotropic, over (mu, sin²phi, alpha_u, alpha_v) when anisotropic.
-ALPHA_AXIS = Axis("alpha", 0.0, 1.0, 25, "sqrt")
+# isotropic, over (mu, sin²phi, alpha_u, alpha_v) when anisotropic; the
+# roughness axes reach infinity (where E = 0), smooth (C1) in the roughness.
+INF = float("inf")
+ALPHA_AXIS = Axis("alpha", 0.0, INF, 33, "ratio", smooth=True)
 ISOTROPIC_AXES = (Axis("mu", 0.0, 1.0, 33, "sqrt"), ALPHA_AXIS)
 ANISOTROPIC_AXES = (Axis("mu", 0.0, 1.0, 25, "sqrt"), Axis("sin2phi", 0.0, 1.0, 9),
-                    Axis("alpha_u", 0.0, 1.0, 17, "sqrt"), Axis("alpha_v", 0.0, 1.0, 17, "sqrt"))
+                    Axis("alpha_u", 0.0, INF, 25, "ratio", smooth=True),
+                    Axis("alpha_v", 0.0, INF, 25, "ratio", smooth=True))
 
 
 def _clamped(f):
@@ -208,9 +212,9 @@ ISOTROPIC = energy.AlbedoSpec(
     f=_clamped(lambda wi, wo, a: specular_vectors(wi, wo, a, a)),
     sample=_clamped(lambda wi, u, a: sample_lobe(wi, u, a, a)),
     pdf=_clamped(lambda wi, wo, a: pdf_specular(wi, wo, a, a)))
-ANISOTROPIC = energy.AlbedoSpec(
+ANISOTROPIC = energy.AlbedoSpec(                  # 140,625 nodes: 128² samples (~1 min)
     "ward/anisotropic", ANISOTROPIC_AXES, f=_clamped(specular_vectors),
-    sample=_clamped(sample_lobe), pdf=_clamped(pdf_specular))
+    sample=_clamped(sample_lobe), pdf=_clamped(pdf_specular), samples=128)
 
 
 class Ward(BRDF):
@@ -294,6 +298,9 @@ class Ward(BRDF):
 
     def table_parameters(self, inp):
         return (inp.alpha_t, inp.alpha_b) if self.anisotropic else (inp.alpha_t,)
+
+    def table_sources(self):
+        return ("alpha_u", "alpha_v") if self.anisotropic else ("alpha",)
 
     def ms_colour(self, inp):
         return inp.m_s

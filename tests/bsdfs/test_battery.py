@@ -19,6 +19,8 @@ parameter declarations (``PARAMS``, ``OPTIONS``):
 10. every property form a Mitsuba scene gives a parameter, read as Mitsuba's
     own plugins read it, and direct calls as Mitsuba's bindings take them
     (the other variants: tests/test_variants.py).
+11. frozen evaluation (``dr.freeze``) of every compensated configuration: the
+    tables a plugin reads are part of what Dr.Jit traverses.
 
 A model's own module keeps only its independent transcription of the lecture
 and what is particular to it.
@@ -31,6 +33,7 @@ tests/bsdfs/test_registry.py checks that).
 """
 from __future__ import annotations
 
+import gc
 import math
 
 import numpy as np
@@ -609,3 +612,48 @@ def test_direct_calls_as_mitsuba_takes_them(name):
     failures = direct_call_failures({"type": name})
     assert not failures, "\n".join(failures)
 
+
+# ----------------------------------------------------------------------------
+#  11. Frozen evaluation
+# ----------------------------------------------------------------------------
+
+def compensated(name, e) -> list:
+    seen = []
+    for c in e.consistency + e.extremes:
+        if c.get("energy_compensation") and c not in seen:
+            seen.append(c)
+    return [pytest.param(c, id=config_id(c)) for c in seen]
+
+
+FROZEN = from_entries(compensated)
+
+
+def interaction(wi) -> mi.SurfaceInteraction3f:
+    si = dr.zeros(mi.SurfaceInteraction3f)
+    si.wi = wi
+    si.uv = mi.Point2f(0.5, 0.5)
+    return si
+
+
+@dr.freeze(state_fn=lambda bsdf, wi, wo: str(bsdf))
+def frozen_eval_pdf(bsdf, wi, wo):
+    """One frozen function for every case (a frozen function freed while
+    another records aborts); the plugin's description, with its options, is
+    part of the key (its Python-side choices are not traversed)."""
+    return bsdf.eval_pdf(mi.BSDFContext(), interaction(wi), wo)
+
+
+@pytest.mark.parametrize("config", FROZEN)
+def test_frozen_eval_matches_the_plain_call(config, rng):
+    """eval_pdf inside dr.freeze (recorded at the first call, replayed at the
+    second with other directions) equals the plain call: arrays made before
+    the recording (the compensation tables) reach the frozen function through
+    the plugin's traversal, as its inputs."""
+    gc.collect()                  # the earlier tests' objects, not during a recording
+    bsdf = mi.load_dict(config)
+    for _ in range(2):
+        wi, wo = vec(random_hemisphere(rng, 512)), vec(random_hemisphere(rng, 512))
+        value, pdf = frozen_eval_pdf(bsdf, wi, wo)
+        expected, expected_pdf = bsdf.eval_pdf(mi.BSDFContext(), interaction(wi), wo)
+        np.testing.assert_allclose(np.array(value), np.array(expected), rtol=1e-5, atol=1e-7)
+        np.testing.assert_allclose(np.array(pdf), np.array(expected_pdf), rtol=1e-5, atol=1e-7)

@@ -38,7 +38,7 @@ A model subclasses :class:`BRDF` and supplies:
     and parameters that exclude each other; it then calls ``reader.read(p)``);
 ``has_diffuse()``, ``has_specular()``
     whether a lobe can matter, through :meth:`BRDF.off`;
-``evaluate(si, active)``
+``eval_textures(si, active)``
     the textures evaluated at ``si``, as a :class:`types.SimpleNamespace`;
 ``f_diffuse(inp, si, wo)``, ``f_specular(inp, si, wo)``
     each lobe in eval convention (the lecture's clamp(d·n) in scanline mode,
@@ -769,7 +769,7 @@ class BRDF:
     def has_specular(self) -> bool:
         return False
 
-    def evaluate(self, si, active) -> SimpleNamespace:
+    def eval_textures(self, si, active) -> SimpleNamespace:
         return SimpleNamespace()
 
     def f_diffuse(self, inp, si, wo):
@@ -820,7 +820,7 @@ class BRDF:
         table = self.compensation()
         if table is None:
             return
-        inp = self.evaluate(dr.zeros(mi.SurfaceInteraction3f), True)
+        inp = self.eval_textures(dr.zeros(mi.SurfaceInteraction3f), True)
         constants = tuple(
             None if isinstance(obj, mi.Object) and obj.is_spatially_varying() else to_float(x)
             for obj, x in zip((getattr(self, "m_" + n) for n in self.table_sources()),
@@ -899,7 +899,7 @@ class BRDF:
 
     def inputs(self, si, active) -> SimpleNamespace:
         """Everything a call needs at ``si``, each texture evaluated once."""
-        inp = self.evaluate(si, active)
+        inp = self.eval_textures(si, active)
         if self.multiple:
             inp.g_i = self.ms_albedo(inp, si.wi)              # g(w_i)
             inp.g_avg = self.ms_average(inp)                  # G_avg

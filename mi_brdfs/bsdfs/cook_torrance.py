@@ -226,12 +226,12 @@ class CookTorrance(BRDF):
     def has_specular(self) -> bool:
         return not (self.off("k", 1.0) or self.off("specular_reflectance"))
 
-    def evaluate(self, si, active):
+    def eval_textures(self, si, active):
         inp = SimpleNamespace(alpha=dr.fmax(self.m_alpha.eval_1(si, active), mf.ALPHA_MIN))
         if self.diffuse:
-            inp.m_d = self.m_diffuse_reflectance.eval(si, active)
+            inp.colour_d = self.m_diffuse_reflectance.eval(si, active)
         if self.specular:
-            inp.m_s = self.m_specular_reflectance.eval(si, active)
+            inp.colour_s = self.m_specular_reflectance.eval(si, active)
         return inp
 
     def lobe_weights(self, inp):
@@ -239,19 +239,19 @@ class CookTorrance(BRDF):
         return k, 1.0 - k
 
     def f_diffuse(self, inp, si, wo):
-        return lambert.f(inp.m_d, mi.Frame3f.cos_theta(wo), self.mode)
+        return lambert.f(inp.colour_d, mi.Frame3f.cos_theta(wo), self.mode)
 
     def f_specular(self, inp, si, wo):
-        return Scaled(inp.m_s, specular(si.wi, wo, inp.alpha, self.switch("f0"),
+        return Scaled(inp.colour_s, specular(si.wi, wo, inp.alpha, self.switch("f0"),
                                         self.distribution, self.geometry))
 
     def selection_weights(self, inp, si):
         w_d = w_s = mi.Float(0.0)
         if self.diffuse:
-            w_d = self.m_k * lambert.albedo(mean(inp.m_d), self.mode)
+            w_d = self.m_k * lambert.albedo(mean(inp.colour_d), self.mode)
         if self.specular:
             fresnel = mf.fresnel_schlick(self.m_f0, mi.Frame3f.cos_theta(si.wi))
-            w_s = (1.0 - self.m_k) * mean(inp.m_s) * fresnel
+            w_s = (1.0 - self.m_k) * mean(inp.colour_s) * fresnel
         return w_d, w_s
 
     # --- specular sampling ----------------------------------------------------
@@ -264,7 +264,7 @@ class CookTorrance(BRDF):
     def f_pdf_specular(self, inp, si, wo):
         f, p, ratio = lobe(si.wi, wo, inp.alpha, self.distribution, self.switch("f0"),
                            self.geometry, self.sample_visible)
-        return Scaled(inp.m_s, f, ratio), p
+        return Scaled(inp.colour_s, f, ratio), p
 
     # --- energy compensation ----------------------------------------------------
     def albedo_spec(self) -> energy.AlbedoSpec:
@@ -280,4 +280,4 @@ class CookTorrance(BRDF):
         return ("alpha", "f0")
 
     def ms_colour(self, inp):
-        return inp.m_s
+        return inp.colour_s

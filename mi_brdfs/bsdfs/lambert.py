@@ -63,8 +63,8 @@ class Lambert(BRDF):
     def has_diffuse(self) -> bool:
         return not self.off("reflectance")
 
-    def evaluate(self, si, active):
-        return SimpleNamespace(m_d=self.m_reflectance.eval(si, active))
+    def eval_textures(self, si, active):
+        return SimpleNamespace(colour_d=self.m_reflectance.eval(si, active))
 
     def f_diffuse(self, inp, si, wo):
-        return f(inp.m_d, mi.Frame3f.cos_theta(wo), self.mode)
+        return f(inp.colour_d, mi.Frame3f.cos_theta(wo), self.mode)

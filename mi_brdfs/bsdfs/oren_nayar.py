@@ -236,21 +236,21 @@ class OrenNayar(BRDF):
     def has_diffuse(self) -> bool:
         return not self.off("reflectance")
 
-    def evaluate(self, si, active):
+    def eval_textures(self, si, active):
         sigma = self.m_sigma.eval_1(si, active)
-        return SimpleNamespace(m_d=self.m_reflectance.eval(si, active), sigma=sigma,
+        return SimpleNamespace(colour_d=self.m_reflectance.eval(si, active), sigma=sigma,
                                r=eon_roughness(sigma))
 
     def f_diffuse(self, inp, si, wo):
         if self.energy_compensation:               # EON: FON + the base's multiple scattering
-            return fon(inp.m_d, inp.r, si.wi, wo)
+            return fon(inp.colour_d, inp.r, si.wi, wo)
         cos_i, cos_o = mi.Frame3f.cos_theta(si.wi), mi.Frame3f.cos_theta(wo)
         if self.method == "table":
             sa_tb = self.table(cos_o, cos_i)
         else:
             sa_tb = sin_alpha_tan_beta(cos_i, cos_o)
         g = g_azimuth(si.wi, wo)
-        return oren_nayar(inp.m_d, inp.sigma, g, sa_tb, cos_o, self.mode)
+        return oren_nayar(inp.colour_d, inp.sigma, g, sa_tb, cos_o, self.mode)
 
     # --- energy compensation (EON) ------------------------------------------------
     def ms_albedo(self, inp, v):
@@ -261,7 +261,7 @@ class OrenNayar(BRDF):
 
     def ms_colour(self, inp):
         # EON's rho_ms: rho enters as the paper defines it, not linearly
-        return energy.ms_series(inp.m_d, fon_albedo_average(inp.r))
+        return energy.ms_series(inp.colour_d, fon_albedo_average(inp.r))
 
     def describe(self) -> dict:
         fields = BRDF.describe(self)

@@ -156,24 +156,24 @@ class Phong(BRDF):
     def has_specular(self) -> bool:
         return not self.off("specular_reflectance")
 
-    def evaluate(self, si, active):
+    def eval_textures(self, si, active):
         inp = SimpleNamespace(gamma=self.m_exponent.eval_1(si, active))
         if self.diffuse:
-            inp.m_d = self.m_diffuse_reflectance.eval(si, active)
+            inp.colour_d = self.m_diffuse_reflectance.eval(si, active)
         if self.specular:
-            inp.m_s = self.m_specular_reflectance.eval(si, active)
+            inp.colour_s = self.m_specular_reflectance.eval(si, active)
         return inp
 
     def f_diffuse(self, inp, si, wo):
-        return lambert.f(inp.m_d, mi.Frame3f.cos_theta(wo), self.mode)
+        return lambert.f(inp.colour_d, mi.Frame3f.cos_theta(wo), self.mode)
 
     def f_specular(self, inp, si, wo):
         spec = self.specular_scanline if self.mode == "scanline" else self.specular_hdr
-        return Scaled(inp.m_s, spec(si.wi, wo, inp.gamma))
+        return Scaled(inp.colour_s, spec(si.wi, wo, inp.gamma))
 
     def selection_weights(self, inp, si):
-        w_d = mean(inp.m_d) if self.diffuse else mi.Float(0.0)
-        w_s = (mean(inp.m_s) * self.specular_weight(inp.gamma, self.mode)
+        w_d = mean(inp.colour_d) if self.diffuse else mi.Float(0.0)
+        w_s = (mean(inp.colour_s) * self.specular_weight(inp.gamma, self.mode)
                if self.specular else mi.Float(0.0))
         return w_d, w_s
 
@@ -195,4 +195,4 @@ class Phong(BRDF):
         return ("exponent",)
 
     def ms_colour(self, inp):
-        return inp.m_s
+        return inp.colour_s

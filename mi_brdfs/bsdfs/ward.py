@@ -261,7 +261,7 @@ class Ward(BRDF):
     def has_specular(self) -> bool:
         return not self.off("specular_reflectance")
 
-    def evaluate(self, si, active):
+    def eval_textures(self, si, active):
         if self.anisotropic:
             alpha_t = dr.fmax(self.m_alpha_u.eval_1(si, active), ALPHA_MIN)
             alpha_b = dr.fmax(self.m_alpha_v.eval_1(si, active), ALPHA_MIN)
@@ -269,20 +269,20 @@ class Ward(BRDF):
             alpha_t = alpha_b = dr.fmax(self.m_alpha.eval_1(si, active), ALPHA_MIN)
         inp = SimpleNamespace(alpha_t=alpha_t, alpha_b=alpha_b)
         if self.diffuse:
-            inp.m_d = self.m_diffuse_reflectance.eval(si, active)
+            inp.colour_d = self.m_diffuse_reflectance.eval(si, active)
         if self.specular:
-            inp.m_s = self.m_specular_reflectance.eval(si, active)
+            inp.colour_s = self.m_specular_reflectance.eval(si, active)
         return inp
 
     def f_diffuse(self, inp, si, wo):
-        return lambert.f(inp.m_d, mi.Frame3f.cos_theta(wo), self.mode)
+        return lambert.f(inp.colour_d, mi.Frame3f.cos_theta(wo), self.mode)
 
     def f_specular(self, inp, si, wo):
-        return Scaled(inp.m_s, SPECULAR[self.formula](si.wi, wo, inp.alpha_t, inp.alpha_b))
+        return Scaled(inp.colour_s, SPECULAR[self.formula](si.wi, wo, inp.alpha_t, inp.alpha_b))
 
     def selection_weights(self, inp, si):
-        w_d = lambert.albedo(mean(inp.m_d), self.mode) if self.diffuse else mi.Float(0.0)
-        w_s = mean(inp.m_s) if self.specular else mi.Float(0.0)
+        w_d = lambert.albedo(mean(inp.colour_d), self.mode) if self.diffuse else mi.Float(0.0)
+        w_s = mean(inp.colour_s) if self.specular else mi.Float(0.0)
         return w_d, w_s
 
     # --- specular sampling ----------------------------------------------------
@@ -303,4 +303,4 @@ class Ward(BRDF):
         return ("alpha_u", "alpha_v") if self.anisotropic else ("alpha",)
 
     def ms_colour(self, inp):
-        return inp.m_s
+        return inp.colour_s

@@ -232,7 +232,7 @@ def fresnel_section(seed: int = 5) -> list[dict]:
     cos_d = np.sum(wi * h, axis=1)
     ratio = fresnel_dielectric(cos_d, ETA) / fresnel_schlick(cos_d, F0_GLASS)
 
-    def evaluate(config):
+    def eval_pairs(config):
         si = dr.zeros(mi.SurfaceInteraction3f, FRESNEL_PAIRS)
         si.wi = mi.Vector3f(wi[:, 0], wi[:, 1], wi[:, 2])
         value = mi.load_dict(config).eval(mi.BSDFContext(), si,
@@ -241,9 +241,9 @@ def fresnel_section(seed: int = 5) -> list[dict]:
 
     rows = []
     for alpha in FRESNEL_ALPHAS:
-        ours = evaluate({"type": "cook_torrance", "k": 0.0, "f0": F0_GLASS, "geometry": "smith",
+        ours = eval_pairs({"type": "cook_torrance", "k": 0.0, "f0": F0_GLASS, "geometry": "smith",
                          "distribution": "ggx", "alpha": alpha})
-        builtin = evaluate({"type": "roughplastic", "distribution": "ggx", "alpha": alpha,
+        builtin = eval_pairs({"type": "roughplastic", "distribution": "ggx", "alpha": alpha,
                             "diffuse_reflectance": 0.0, "int_ior": ETA, "ext_ior": 1.0})
         scale = float(builtin.max())
         rows.append({"id": f"cook_torrance-roughplastic-fresnel-{alpha:g}",

@@ -47,7 +47,7 @@ from mi_brdfs.bsdfs.base import ParameterError
 from mi_brdfs.tools import catalog
 from mi_brdfs.tools.catalog import ENTRIES
 from support import (CHI2_ALPHA, BrokenEntry, albedo, assert_refused, chi2_test, chi2_test_count,
-                     config_id, direct_call_failures, evaluate, error_line, finite,
+                     config_id, direct_call_failures, eval_and_pdf, error_line, finite,
                      finite_difference, floats, points, f32, mirror_pairs,
                      property_form_failures, random_hemisphere, surface, vec)
 
@@ -125,7 +125,7 @@ def test_load_eval_pdf_sample(config, rng):
     assert type(bsdf).__name__ in str(bsdf) and f"mode={config['mode']}" in str(bsdf)
     n = 4096
     wi, wo = random_hemisphere(rng, n), random_hemisphere(rng, n)
-    value, pdf = evaluate(bsdf, wi, wo)
+    value, pdf = eval_and_pdf(bsdf, wi, wo)
     assert finite(value) and finite(pdf) and (value >= 0).all() and (pdf >= 0).all()
     assert (value.max(axis=1) > 0).mean() > 0.5 and (pdf > 0).mean() > 0.5
     bs, weight = bsdf.sample(mi.BSDFContext(), surface(wi), floats(rng.random(n)),
@@ -221,8 +221,8 @@ def test_reciprocity(config, rng):
     """hdr: eval(w_i, w_o)/cos θ_o = eval(w_o, w_i)/cos θ_i (the BRDF is symmetric)."""
     wi, wo = mirror_pairs(rng, 4096, ENTRIES[config["type"]].lobe_width, min_cos=0.01)
     bsdf = mi.load_dict(config)
-    forward = evaluate(bsdf, wi, wo)[0] / wo[:, 2:3]
-    backward = evaluate(bsdf, wo, wi)[0] / wi[:, 2:3]
+    forward = eval_and_pdf(bsdf, wi, wo)[0] / wo[:, 2:3]
+    backward = eval_and_pdf(bsdf, wo, wi)[0] / wi[:, 2:3]
     rtol = 1e-3 if config.get("energy_compensation") else 1e-4
     np.testing.assert_allclose(forward, backward, rtol=rtol, atol=1e-6 * forward.max())
     assert forward.max() > 0.1
@@ -376,7 +376,7 @@ def test_gradient_matches_finite_differences(config, p, where, x, rng):
     h = 1e-3 * max(1.0, abs(x))
     side = {"at 0": "forward", "at lo": "forward", "at hi": "backward"}.get(where, "central")
     fd = finite_difference(
-        lambda v: float(evaluate(mi.load_dict({**config, p.name: v}), wi, wo)[0].sum()),
+        lambda v: float(eval_and_pdf(mi.load_dict({**config, p.name: v}), wi, wo)[0].sum()),
         x, h, side)
     assert abs(fd) > 1e-3, f"the loss does not depend on {p.name} here (fd = {fd})"
     np.testing.assert_allclose(grad, fd, rtol=2e-2)
@@ -471,7 +471,7 @@ def edge_cases():
 def test_edge_values_are_accepted(config, rng):
     bsdf = mi.load_dict(config)
     wi, wo = random_hemisphere(rng, 256), random_hemisphere(rng, 256)
-    value, pdf = evaluate(bsdf, wi, wo)
+    value, pdf = eval_and_pdf(bsdf, wi, wo)
     assert finite(value) and finite(pdf) and (value >= 0).all() and (pdf >= 0).all()
 
 
@@ -516,7 +516,7 @@ def test_update_matches_a_fresh_load(config, rng):
     params.update()
     assert changed
     fresh = mi.load_dict({**config, **changed})
-    for a, b in zip(evaluate(bsdf, wi, wo), evaluate(fresh, wi, wo)):
+    for a, b in zip(eval_and_pdf(bsdf, wi, wo), eval_and_pdf(fresh, wi, wo)):
         np.testing.assert_allclose(a, b, rtol=1e-5, atol=1e-7)
 
 
@@ -585,7 +585,7 @@ def test_a_number_folded_at_0_or_1_unfolds_when_it_changes(name, rng):
         params.update()
         assert bsdf.trace_key() != folded, f"{name}.{p.name} = {value}"
         fresh = mi.load_dict({"type": name, p.name: other})
-        for a, b in zip(evaluate(bsdf, wi, wo), evaluate(fresh, wi, wo)):
+        for a, b in zip(eval_and_pdf(bsdf, wi, wo), eval_and_pdf(fresh, wi, wo)):
             np.testing.assert_allclose(a, b, rtol=1e-5, atol=1e-7,
                                        err_msg=f"{name}.{p.name}: {value} -> {other}")
 

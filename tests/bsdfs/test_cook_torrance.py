@@ -10,7 +10,7 @@ import pytest
 import mitsuba as mi
 
 import lecture
-from support import albedo, assert_refused, evaluate, random_hemisphere, rgb
+from support import albedo, assert_refused, eval_and_pdf, random_hemisphere, rgb
 
 DISTRIBUTIONS = ["blinn", "beckmann", "ggx"]
 GEOMETRIES = ["cook_torrance", "smith"]
@@ -44,7 +44,7 @@ def test_matches_lecture(rng, distribution, geometry, mode):
     bsdf = mi.load_dict({"type": "cook_torrance", "mode": mode, "diffuse_reflectance": rgb(m_d),
                          "specular_reflectance": rgb(m_s), "k": k, "f0": f0, "alpha": rho,
                          "distribution": distribution, "geometry": geometry})
-    v, _ = evaluate(bsdf, wi=w, wo=d)
+    v, _ = eval_and_pdf(bsdf, wi=w, wo=d)
     reference = lecture.cook_torrance_scanline if mode == "scanline" else lecture.cook_torrance_hdr_eval
     expected = reference(d, w, m_d, m_s, k, f0, rho, distribution, geometry)
     # Blinn's Smith G1 is a table (microfacet.G1_BLINN_VALUES): its interpolation
@@ -60,7 +60,7 @@ def test_below_surface_is_black(rng):
     d, w = pairs(rng, 512)
     bsdf = mi.load_dict({"type": "cook_torrance", "mode": "scanline"})
     for wi, wo in [(w, d * [1, 1, -1]), (w * [1, 1, -1], d)]:
-        v, p = evaluate(bsdf, wi, wo)
+        v, p = eval_and_pdf(bsdf, wi, wo)
         assert not v.any() and not p.any()
 
 
@@ -81,8 +81,8 @@ def test_equals_roughconductor(rng, distribution, alpha):
     ours = mi.load_dict({"type": "cook_torrance", "k": 0.0, "f0": 1.0, "geometry": "smith",
                          "distribution": distribution, "alpha": alpha})
     ref = mi.load_dict({"type": "roughconductor", "distribution": distribution, "alpha": alpha})
-    v, p = evaluate(ours, w, d)
-    v_ref, p_ref = evaluate(ref, w, d)
+    v, p = eval_and_pdf(ours, w, d)
+    v_ref, p_ref = eval_and_pdf(ref, w, d)
     big = v_ref[:, 0] > 1e-6 * v_ref[:, 0].max()
     assert big.sum() > 1000
     np.testing.assert_allclose(v[big], v_ref[big], rtol=RTOL[distribution])
@@ -152,8 +152,8 @@ def test_roughplastic_differs_only_by_schlick(rng, alpha):
                          "distribution": "ggx", "alpha": alpha})
     ref = mi.load_dict({"type": "roughplastic", "distribution": "ggx", "alpha": alpha,
                         "diffuse_reflectance": 0.0, "int_ior": eta, "ext_ior": 1.0})
-    v, _ = evaluate(ours, w, d)
-    v_ref, _ = evaluate(ref, w, d)
+    v, _ = eval_and_pdf(ours, w, d)
+    v_ref, _ = eval_and_pdf(ref, w, d)
     wh = lecture.dot(w, lecture.half(d, w))
     expected = lecture.F_schlick(f0, wh) / lecture.fresnel_dielectric(wh, eta)
     ok = v_ref[:, 0] > 1e-6 * v_ref[:, 0].max()
@@ -347,7 +347,7 @@ def test_smith_at_grazing_mirror_pairs(distribution, alpha):
     wo = wi * [-1, 1, 1]
     bsdf = mi.load_dict({"type": "cook_torrance", "distribution": distribution,
                          "geometry": "smith", "alpha": alpha, "k": 0.0, "f0": 1.0})
-    value, pdf = evaluate(bsdf, wi, wo)
+    value, pdf = eval_and_pdf(bsdf, wi, wo)
     assert np.isfinite(value).all() and np.isfinite(pdf).all()
     n = len(GRAZING)
     assert (value[:n] <= 1e-3).all() and (value[n:] == 0).all()

@@ -4,7 +4,7 @@ import pytest
 
 import mi_brdfs  # noqa: F401  (LLVM set-up, variant, plugin registration)
 from support import BrokenEntry
-from support import evaluate, random_hemisphere, surface, vec  # noqa: F401  (for older modules)
+from support import eval_and_pdf, random_hemisphere, surface, vec  # noqa: F401  (for older modules)
 
 
 @pytest.hookimpl(tryfirst=True)

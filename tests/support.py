@@ -87,7 +87,7 @@ def surface(wi, uv=None) -> mi.SurfaceInteraction3f:
     return si
 
 
-def evaluate(bsdf, wi, wo, uv=None):
+def eval_and_pdf(bsdf, wi, wo, uv=None):
     """eval (n, 3) and pdf (n,) of a BSDF on direction pairs (NumPy in and out, float64)."""
     ctx = mi.BSDFContext()
     si = surface(wi, uv)
@@ -576,7 +576,7 @@ def mirror_lobe_albedo(bsdf, theta_deg: float, width: float, **quadrature) -> np
     wo = (np.sin(A) * np.cos(P))[:, None] * t1 + (np.sin(A) * np.sin(P))[:, None] * t2 \
         + np.cos(A)[:, None] * r
     wi = np.tile([math.sin(t), 0.0, math.cos(t)], (len(W), 1))
-    return evaluate(bsdf, wi, wo)[0].T @ W
+    return eval_and_pdf(bsdf, wi, wo)[0].T @ W
 
 
 def uniform_hemisphere_grid(nu: int, nv: int, seed: int) -> np.ndarray:

@@ -24,7 +24,12 @@
 - **Every variant**: scalar and JIT, RGB, mono and spectral; polarized variants
   get the plugins as depolarizers (Mitsuba's ``depolarizer``, as its ``diffuse``).
 - **Per call**, each texture is evaluated once (:meth:`BRDF.inputs`) and shared
-  by the lobes, the selection weights, the sampler and the pdf.
+  by the lobes, the selection weights, the sampler and the pdf; a call traces
+  only what it needs (Dr.Jit traces every material of a scene at every render,
+  so a traced operation costs per material): a single lobe is sampled by its
+  own sampler with no pick, and a lobe that is a colour times a shape
+  (:class:`Scaled`) is masked, weighted and divided by its pdf as one Float
+  per lane, its colour multiplied last.
 
 A model subclasses :class:`BRDF` and supplies:
 
@@ -33,12 +38,14 @@ A model subclasses :class:`BRDF` and supplies:
     and parameters that exclude each other; it then calls ``reader.read(p)``);
 ``has_diffuse()``, ``has_specular()``
     whether a lobe can matter, through :meth:`BRDF.off`;
-``evaluate(si, active)``
+``eval_textures(si, active)``
     the textures evaluated at ``si``, as a :class:`types.SimpleNamespace`;
 ``f_diffuse(inp, si, wo)``, ``f_specular(inp, si, wo)``
     each lobe in eval convention (the lecture's clamp(d·n) in scanline mode,
-    cos θ_o in hdr mode), before the per-lobe clamp; lanes with ``wi`` or ``wo``
-    below the surface are zeroed by the base, unless ``lit_from_behind()``;
+    cos θ_o in hdr mode), before the per-lobe clamp: a spectrum, or, for a lobe
+    that is a colour times a shape, a :class:`Scaled` (colour, shape), which
+    the base multiplies last; lanes with ``wi`` or ``wo`` below the surface are
+    zeroed by the base, unless ``lit_from_behind()``;
 ``lobe_weights(inp)``
     the factors multiplying each (clamped) lobe, e.g. k and 1 - k;
 ``selection_weights(inp, si)``
@@ -46,14 +53,20 @@ A model subclasses :class:`BRDF` and supplies:
 ``sample_specular(inp, si, sample2)``, ``pdf_specular(inp, si, wo)``
     the glossy lobe's sampler and its density;
 
-and, if ``compensable``: ``ms_colour(inp)`` and either ``albedo_spec()`` and
-``table_parameters(inp)`` (a tabulated albedo, :mod:`.energy`) or
-``albedo(inp, v)`` and ``albedo_average(inp)`` (an analytic one).
+and, if ``compensable`` (:mod:`.energy`): ``ms_colour(inp)``, the colour C
+that scales the multiple-scattering lobe, and either ``compensation()`` (an
+:class:`.energy.Table` of its albedo g per unit colour), ``table_parameters(inp)``
+and ``table_sources()`` (the parameter each comes from), or ``ms_albedo(inp, v)``
+and ``ms_average(inp)`` (an analytic g). The base specialises the table at the
+parameters that are constant over the surface (at load time and at every
+update) and holds its Dr.Jit arrays as the member ``m_ms``, so that Dr.Jit
+traverses them with the plugin (frozen functions).
 """
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from operator import attrgetter
 from types import SimpleNamespace
 from typing import NamedTuple
 
@@ -377,6 +390,11 @@ T = mi.Properties.Type
 NUMBERS = (T.Float, T.Integer)
 
 
+def to_float(x) -> float:
+    """A Python float from an opaque Float (JIT variants) or a float (scalar ones)."""
+    return float(x[0]) if dr.is_array_v(x) else float(x)
+
+
 class Reader:
     """Reads one plugin's properties and raises ParameterError on bad values.
 
@@ -489,12 +507,12 @@ class Reader:
 def as_type(x, kind: type):
     """``x`` as a ``kind`` (a Dr.Jit type): a direct call from Python may pass
     a list, a tuple or a number, as Mitsuba's own bindings accept them."""
-    return x if isinstance(x, kind) else kind(x)
+    return x if type(x) is kind or isinstance(x, kind) else kind(x)
 
 
 def mean(spectrum) -> mi.Float:
     """Channel mean of a spectrum: the scalar weight used for lobe selection."""
-    return dr.mean(spectrum, axis=0)
+    return dr.sum(spectrum, axis=0) * (1.0 / dr.size_v(spectrum))
 
 
 def clamp01(x):
@@ -504,11 +522,89 @@ def clamp01(x):
     return dr.fmin(dr.select(x >= 0.0, x, 0.0), 1.0)
 
 
+class Scaled(NamedTuple):
+    """A lobe's value as ``colour · shape``, what most lobes are: the colour (a
+    spectrum) is multiplied last, so that the base's masks, weights and guards
+    act on one Float per lane instead of one per colour channel.
+
+    ``ratio``: shape / pdf of the lobe's own sampler, where it is known in
+    closed form (Lambert's lobe under cosine sampling: 1, :func:`.lambert.f`);
+    a sample of that lobe alone then weighs ``colour · ratio``, without the
+    division and without the float32 guards that the division needs."""
+    colour: object
+    shape: object
+    ratio: object = None
+
+
+def product(value):
+    """A lobe's value as a spectrum (a :class:`Scaled` multiplied out)."""
+    return value.colour * value.shape if type(value) is Scaled else value
+
+
+def one(x) -> bool:
+    """True for the Python number 1 (a factor that needs no multiplication)."""
+    return (type(x) is float or type(x) is int) and x == 1.0
+
+
+def weighted(value, w, scanline: bool):
+    """w times a lobe's value, clamped per channel to [0, 1] first in scanline
+    mode (the lecture's clamp01(lobe)); a :class:`Scaled` value stays one in hdr mode."""
+    if scanline:
+        value = clamp01(product(value))
+    elif type(value) is Scaled:
+        if one(w):
+            return value
+        return Scaled(value.colour, w * value.shape,
+                      None if value.ratio is None else w * value.ratio)
+    return value if one(w) else w * value
+
+
+def mixed(p, prob, density):
+    """The mixture density p plus one lobe's density picked with probability prob
+    (p None: the first lobe; prob the number 1: a lobe alone)."""
+    term = density if one(prob) else prob * density
+    return term if p is None else p + term
+
+
+def total(values, mask):
+    """The sum of lobe values, 0 where ``mask`` is off, as a spectrum: a
+    :class:`Scaled` value is masked on its shape and multiplied by its colour last."""
+    f = None
+    for v in values:
+        v = v.colour * dr.select(mask, v.shape, 0.0) if type(v) is Scaled \
+            else dr.select(mask, v, 0.0)
+        f = v if f is None else f + v
+    return f if type(f) is mi.UnpolarizedSpectrum else mi.UnpolarizedSpectrum(f)
+
+
 class Lobes(NamedTuple):
     """Which lobes a call evaluates (Python booleans: decided at trace time)."""
     diffuse: bool
     specular: bool
     multiple: bool
+
+
+class Plan(NamedTuple):
+    """What every traced call of an instance reads, decided with its lobes
+    (:meth:`BRDF.update_lobes`) so that a call reads it once."""
+    lobes: Lobes          # the lobes present
+    scanline: bool        # mode == "scanline"
+    cosine: bool          # sampling == "cosine": every lobe sampled from the cosine hemisphere
+    uniform: bool         # the diffuse lobe sampled from the uniform hemisphere
+    behind: bool          # lit_from_behind()
+
+
+ALL = int(mi.BSDFFlags.All)       # a context's type mask that enables every lobe type
+ANY = 2**32 - 1                   # its component (-1): every component
+GLOSSY = int(mi.BSDFFlags.GlossyReflection)      # a sample's type
+DIFFUSE = int(mi.BSDFFlags.DiffuseReflection)
+
+
+def facing(si, active):
+    """``active`` where the viewer is above the surface: a viewer below (or on)
+    it gets no reflection."""
+    up = si.wi.z > HORIZON
+    return up if active is True else up & active
 
 
 # ----------------------------------------------------------------------------
@@ -524,7 +620,7 @@ class State:
 
 
 STATE = ("params", "live", "diffuse", "specular", "multiple", "diffuse_index",
-         "specular_index", "energy_compensation")      # what the base keeps per instance
+         "specular_index", "energy_compensation", "plan", "switches", "ms_table")   # what the base keeps
 
 
 class BRDF:
@@ -571,10 +667,10 @@ class BRDF:
                 raise DeclarationError(f"{cls.__name__}: {name!r} is declared twice")
         document(cls)
         # Options and the base's state as properties: read at every traced call,
-        # ~0.07 us each against ~0.5 us through __getattr__.
+        # ~0.05 us each (attrgetter, in C) against ~0.5 us through __getattr__.
         for name in STATE + tuple(o.name for o in cls.options()):
             if not any(name in vars(k) for k in cls.__mro__):
-                setattr(cls, name, property(lambda self, n=name: getattr(self._s, n)))
+                setattr(cls, name, property(attrgetter("_s." + name)))
 
     def __setattr__(self, name, value):
         if name.startswith("m_"):                 # members Dr.Jit must see
@@ -658,6 +754,14 @@ class BRDF:
         rng = value_range(obj)
         return rng is not None and rng == (value, value)
 
+    def switch(self, name: str):
+        """Plain-number parameter ``name`` as the formulas take it: the Python
+        number 0 or 1 while it is that constant (as :meth:`off` decides), so
+        that a weight of 1 or a factor that switches a term off folds away when
+        the call is traced (decided again with the lobes); its member otherwise."""
+        value = self.switches.get(name)
+        return getattr(self, "m_" + name) if value is None else value
+
     # --- what a model provides -------------------------------------------------
     def has_diffuse(self) -> bool:
         return False
@@ -665,7 +769,7 @@ class BRDF:
     def has_specular(self) -> bool:
         return False
 
-    def evaluate(self, si, active) -> SimpleNamespace:
+    def eval_textures(self, si, active) -> SimpleNamespace:
         return SimpleNamespace()
 
     def f_diffuse(self, inp, si, wo):
@@ -691,25 +795,50 @@ class BRDF:
         return self.f_specular(inp, si, wo), self.pdf_specular(inp, si, wo)
 
     def albedo_spec(self) -> energy.AlbedoSpec | None:
-        """The :class:`.energy.AlbedoSpec` whose table holds this instance's
-        single-scattering albedo (None: a model with an analytic one)."""
+        """The :class:`.energy.AlbedoSpec` of this instance's single-scattering
+        albedo (None: a model with an analytic one)."""
         return None
+
+    def compensation(self) -> energy.Table | None:
+        """The table of the multiple-scattering lobe's albedo g per unit colour
+        (default: 1 - E of :meth:`albedo_spec`; None: an analytic g)."""
+        spec = self.albedo_spec()
+        return None if spec is None else energy.complement(spec)
 
     def table_parameters(self, inp) -> tuple:
         """The model parameters of that table's axes, evaluated (``inp``)."""
         raise NotImplementedError
 
-    def albedo(self, inp, v):
-        """Single-scattering directional albedo of the compensated lobe per unit
-        colour, at direction v (local), for :mod:`.energy`."""
-        return energy.table(self.albedo_spec())(v, *self.table_parameters(inp))
+    def table_sources(self) -> tuple[str, ...]:
+        """The name of the parameter each table parameter comes from."""
+        raise NotImplementedError
 
-    def albedo_average(self, inp):
-        """Its cosine-weighted hemispherical average."""
-        return energy.table(self.albedo_spec()).average(*self.table_parameters(inp))
+    def specialise_compensation(self) -> None:
+        """The compensation table at the parameters constant over the surface
+        (plain numbers and uniform textures, evaluated once here), its arrays
+        held as the member ``m_ms``."""
+        table = self.compensation()
+        if table is None:
+            return
+        inp = self.eval_textures(dr.zeros(mi.SurfaceInteraction3f), True)
+        constants = tuple(
+            None if isinstance(obj, mi.Object) and obj.is_spatially_varying() else to_float(x)
+            for obj, x in zip((getattr(self, "m_" + n) for n in self.table_sources()),
+                              self.table_parameters(inp)))
+        self.ms_table = table.specialise(constants)
+        self.m_ms = self.ms_table.data               # traversed with the plugin
+
+    def ms_albedo(self, inp, v):
+        """g(v): the directional albedo of the multiple-scattering lobe per unit
+        colour, at direction v (local)."""
+        return self.ms_table(v, self.table_parameters(inp), self.m_ms)
+
+    def ms_average(self, inp):
+        """G_avg: its cosine-weighted hemispherical average."""
+        return self.ms_table.average(self.table_parameters(inp), self.m_ms)
 
     def ms_colour(self, inp):
-        """The per-bounce colour of the compensated lobe (see :func:`.energy.ms_colour`)."""
+        """The colour C scaling the multiple-scattering lobe (see :mod:`.energy`)."""
         raise NotImplementedError
 
     def diffuse_sampling(self) -> str:
@@ -728,6 +857,8 @@ class BRDF:
     # --- lobes and flags ---------------------------------------------------------
     def update_lobes(self) -> None:
         """Declare exactly the lobes present: an absent lobe is never traced."""
+        self.switches = {p.name: v for p in self.params.values() if p.kind == "float"
+                         for v in (0.0, 1.0) if self.off(p.name, v)}
         self.diffuse, self.specular = self.has_diffuse(), self.has_specular()
         parent = self.specular if self.compensates == "specular" else self.diffuse
         self.multiple = self.energy_compensation and parent
@@ -743,36 +874,53 @@ class BRDF:
             flags |= c
         self.m_components = components
         self.m_flags = flags
+        if self.multiple:
+            self.specialise_compensation()
+        self.plan = Plan(Lobes(self.diffuse, self.specular, self.multiple),
+                         self.mode == "scanline", self.sampling == "cosine",
+                         self.diffuse_sampling() == "uniform", self.lit_from_behind())
+
+    def trace_key(self) -> tuple:
+        """The Python-side choices that decide what a call traces beyond the
+        flags: the plan and the parameters folded as numbers. A frozen
+        function keys on it (:mod:`mi_brdfs.render.frozen`): a change
+        re-records instead of replaying stale code."""
+        table = getattr(self, "ms_table", None) if self.multiple else None
+        fixed = tuple(table.fixed) if table is not None else ()
+        return self.plan, tuple(sorted(self.switches.items())), fixed
 
     def enabled(self, ctx) -> Lobes:
         """The lobes that exist and that ctx asks for."""
+        if ctx.type_mask == ALL and ctx.component == ANY:         # (the usual context)
+            return self.plan.lobes
         d = self.diffuse and ctx.is_enabled(mi.BSDFFlags.DiffuseReflection, self.diffuse_index)
         s = self.specular and ctx.is_enabled(mi.BSDFFlags.GlossyReflection, self.specular_index)
         return Lobes(d, s, self.multiple and (s if self.compensates == "specular" else d))
 
     def inputs(self, si, active) -> SimpleNamespace:
         """Everything a call needs at ``si``, each texture evaluated once."""
-        inp = self.evaluate(si, active)
+        inp = self.eval_textures(si, active)
         if self.multiple:
-            inp.e_i = self.albedo(inp, si.wi)                 # E(w_i)
-            inp.e_avg = self.albedo_average(inp)              # E_avg
-            inp.f_ms = energy.ms_colour(self.ms_colour(inp), inp.e_avg)
+            inp.g_i = self.ms_albedo(inp, si.wi)              # g(w_i)
+            inp.g_avg = self.ms_average(inp)                  # G_avg
+            inp.f_ms = self.ms_colour(inp)                    # C
         return inp
 
     def f_multiple(self, inp, si, wo):
-        return energy.ms_lobe(inp.f_ms, inp.e_i, self.albedo(inp, wo), inp.e_avg,
+        return energy.ms_lobe(inp.f_ms, inp.g_i, self.ms_albedo(inp, wo), inp.g_avg,
                               mi.Frame3f.cos_theta(wo))
 
     def probabilities(self, inp, si, use: Lobes):
-        """(p_d, p_s, p_ms): each used lobe picked in proportion to its weight."""
+        """(p_d, p_s, p_ms): each used lobe picked in proportion to its weight;
+        None when a single lobe is used (nothing to choose: nothing traced)."""
         count = sum(use)
-        if count <= 1:                     # nothing to choose: constants, not traced
-            return tuple(mi.Float(1.0 if u else 0.0) for u in use)
+        if count <= 1:
+            return None
         w_d, w_s = self.selection_weights(inp, si)
         w_ms = mi.Float(0.0)
         if use.multiple:
             w = self.lobe_weights(inp)[0 if self.compensates == "diffuse" else 1]
-            w_ms = w * mean(inp.f_ms) * (1.0 - inp.e_i)
+            w_ms = w * mean(inp.f_ms) * inp.g_i
         weights = [dr.select(u, w, 0.0) if u else mi.Float(0.0)
                    for u, w in zip(use, (w_d, w_s, w_ms))]
         total = weights[0] + weights[1] + weights[2]
@@ -782,75 +930,113 @@ class BRDF:
                      for u, w in zip(use, weights))
 
     # --- the BSDF interface --------------------------------------------------
+    # Each call traces only what it needs: a single lobe is sampled by its own
+    # sampler with nothing to pick, and a lobe's value stays colour · shape
+    # (Scaled) until the end, so that masks, weights and guards act on one
+    # Float per lane. A viewer below (or on) the surface gets no reflection.
     def sample(self, ctx, si, sample1, sample2, active=True):
         sample1, sample2 = as_type(sample1, mi.Float), as_type(sample2, mi.Point2f)
         use = self.enabled(ctx)
-        bs = dr.zeros(mi.BSDFSample3f)
-        cos_i = mi.Frame3f.cos_theta(si.wi)
-        active = mi.Bool(active) & (cos_i > HORIZON)
         if not any(use):
-            return bs, self.spectrum(mi.UnpolarizedSpectrum(0.0))
+            return dr.zeros(mi.BSDFSample3f), self.spectrum(mi.UnpolarizedSpectrum(0.0))
+        plan = self.plan
+        active = facing(si, active)
         inp = self.inputs(si, active)
         probs = self.probabilities(inp, si, use)
-        # Pick a lobe (comparisons, not ~: scalar variants' masks are Python bools).
-        if sum(use) == 1:
-            pick_d, pick_s = use.diffuse, use.specular        # Python constants
+        modelled = False                 # wo from the model's own sampler (else a warp of sample2)
+        if probs is None:              # one lobe, its own sampler (or cosine): nothing to pick
+            glossy = use.specular                            # a Python constant
+            if plan.cosine or not (use.specular or plan.uniform):
+                wo = mi.warp.square_to_cosine_hemisphere(sample2)
+            elif use.specular:
+                wo, modelled = self.sample_specular(inp, si, sample2), True
+            else:
+                wo = mi.warp.square_to_uniform_hemisphere(sample2)
+            own = not plan.cosine or not (use.specular or plan.uniform)
         else:
+            # Pick a lobe (comparisons, not ~: scalar variants' masks are Python bools).
             p_d, p_s, _ = probs
-            pick_d = mi.Bool(sample1 < p_d)
-            pick_s = (mi.Bool(sample1 >= p_d) & (sample1 < p_d + p_s)) if use.multiple \
-                else mi.Bool(sample1 >= p_d)
-        if self.sampling == "cosine" or not (use.specular or self.diffuse_sampling() == "uniform"):
-            wo = mi.warp.square_to_cosine_hemisphere(sample2)
-        else:
-            wo = mi.warp.square_to_cosine_hemisphere(sample2)   # diffuse and multiple
-            if use.diffuse and self.diffuse_sampling() == "uniform":
-                wo = dr.select(pick_d, mi.warp.square_to_uniform_hemisphere(sample2), wo)
-            if use.specular:
-                wo = dr.select(pick_s, self.sample_specular(inp, si, sample2), wo)
+            wo = mi.warp.square_to_cosine_hemisphere(sample2)      # diffuse and multiple
+            if not plan.cosine:
+                if use.diffuse and plan.uniform:
+                    wo = dr.select(mi.Bool(sample1 < p_d),
+                                   mi.warp.square_to_uniform_hemisphere(sample2), wo)
+                if use.specular:
+                    pick_s = (mi.Bool(sample1 >= p_d) & (sample1 < p_d + p_s)) if use.multiple \
+                        else mi.Bool(sample1 >= p_d)
+                    wo = dr.select(pick_s, self.sample_specular(inp, si, sample2), wo)
+                    modelled = True
+            # the multiple-scattering lobe counts as the kind of the lobe it compensates
+            glossy = (mi.Bool(sample1 >= p_d) & (sample1 < p_d + p_s)) \
+                if self.compensates == "diffuse" and use.multiple else mi.Bool(sample1 >= p_d)
+            own = False
 
         # The sampled direction is a fixed point for the derivatives (as Mitsuba's
         # differentiable integrators treat it): the weight's gradient is that of
-        # eval/pdf there, not of the sampler's warping.
-        wo = dr.detach(wo)
-        value, pdf = self.lobes(use, probs, inp, si, wo, active)
-        active &= (pdf > 0) & (mi.Frame3f.cos_theta(wo) > HORIZON)    # (a failed sample: pdf 0)
-        # A weight beyond WEIGHT_MAX is no sample of the model but float32 failing
-        # it: a near-mirror lobe at a grazing viewer (alpha 1e-4, cos 1e-30) puts
-        # wo = reflect(wi, m) so close to -wi that wi + wo no longer holds m, and
-        # eval and pdf are taken about another half vector. Discarded.
-        active &= mean(value) <= WEIGHT_MAX * pdf
-        glossy = (pick_s if self.compensates == "diffuse" else
-                  (not pick_d if isinstance(pick_d, bool) else mi.Bool(sample1 >= probs[0])))
-        bs.wo = dr.select(active, wo, 0.0)      # no NaN from inactive lanes either
-        bs.pdf = dr.select(active, pdf, 0.0)
+        # eval/pdf there, not of the sampler's warping (which depends on the
+        # parameters: a warp of sample2 does not).
+        if modelled and dr.grad_enabled(wo):
+            wo = dr.detach(wo)
+        values, pdf, up = self.lobes(use, probs, inp, si, wo, active)
+        active = up & (pdf > 0)                         # (a failed sample: pdf 0)
+        lone = values[0] if len(values) == 1 and type(values[0]) is Scaled else None
+        closed = lone is not None and own and lone.ratio is not None
+        if closed:
+            # f / pdf in closed form (e.g. Lambert: its colour): no division, no guard
+            weight = dr.select(active, lone.colour, 0.0) if one(lone.ratio) \
+                else lone.colour * dr.select(active, lone.ratio, 0.0)
+        else:
+            # A weight beyond WEIGHT_MAX is no sample of the model but float32
+            # failing it: a near-mirror lobe at a grazing viewer (alpha 1e-4, cos
+            # 1e-30) puts wo = reflect(wi, m) so close to -wi that wi + wo no longer
+            # holds m, and eval and pdf are taken about another half vector. Discarded.
+            # (A lone lobe is judged by its shape: its colour is a finite factor.)
+            value = lone.shape if lone is not None else product(values[0])
+            for v in values[1:]:
+                value = value + product(v)
+            active &= (value if lone is not None else mean(value)) <= WEIGHT_MAX * pdf
+            # weight = value / pdf, both scaled by a detached 1/pdf first: the same
+            # value, and derivatives without pdf² (which underflows for the tiny pdfs
+            # of grazing samples and would turn the gradient into inf - inf).
+            p = dr.select(active, pdf, 1.0)
+            value = dr.select(active, value, 0.0)
+            scale = dr.detach(1.0 / dr.fmax(p, PDF_FLOOR))
+            weight = dr.select(active, (value * scale) / (p * scale), 0.0)
+            if lone is not None:
+                weight = lone.colour * weight
+        # no NaN from inactive lanes either (a warp of sample2 has none anywhere)
+        bs = mi.BSDFSample3f(dr.select(active, wo, 0.0) if modelled else wo)
+        # (0 already wherever a closed-form weight is: the pdf is 0 below the surface)
+        bs.pdf = pdf if closed else dr.select(active, pdf, 0.0)
         bs.eta = 1.0
-        bs.sampled_type = dr.select(glossy, mi.UInt32(+mi.BSDFFlags.GlossyReflection),
-                                    mi.UInt32(+mi.BSDFFlags.DiffuseReflection))
-        bs.sampled_component = dr.select(glossy, mi.UInt32(self.specular_index),
-                                         mi.UInt32(self.diffuse_index))
-        # weight = value / pdf, both scaled by a detached 1/pdf first: the same
-        # value, and derivatives without pdf² (which underflows for the tiny pdfs
-        # of grazing samples and would turn the gradient into inf - inf).
-        pdf = dr.select(active, pdf, 1.0)
-        value = dr.select(active, value, 0.0)
-        scale = dr.detach(1.0 / dr.fmax(pdf, PDF_FLOOR))
-        weight = (value * scale) / (pdf * scale)
-        return bs, self.spectrum(dr.select(active, weight, 0.0))
+        if type(glossy) is bool:                       # the picked lobe is known
+            bs.sampled_type = mi.UInt32(GLOSSY if glossy else DIFFUSE)
+            bs.sampled_component = mi.UInt32(self.specular_index if glossy
+                                             else self.diffuse_index)
+        else:
+            bs.sampled_type = dr.select(glossy, mi.UInt32(GLOSSY), mi.UInt32(DIFFUSE))
+            bs.sampled_component = dr.select(glossy, mi.UInt32(self.specular_index),
+                                             mi.UInt32(self.diffuse_index))
+        if type(weight) is not mi.UnpolarizedSpectrum:
+            weight = mi.UnpolarizedSpectrum(weight)
+        return bs, mi.depolarizer(weight) if mi.is_polarized else weight
 
     def eval(self, ctx, si, wo, active=True):
         wo = as_type(wo, mi.Vector3f)
         use = self.enabled(ctx)
         if not any(use):
             return self.spectrum(mi.UnpolarizedSpectrum(0.0))
-        inp = self.inputs(si, active)
-        return self.spectrum(self.lobes(use, None, inp, si, wo, active, pdf=False)[0])
+        active = facing(si, active)
+        values, _, up = self.lobes(use, None, self.inputs(si, active), si, wo, active, pdf=False)
+        value = total(values, active if self.plan.behind else up)
+        return mi.depolarizer(value) if mi.is_polarized else value
 
     def pdf(self, ctx, si, wo, active=True):
         wo = as_type(wo, mi.Vector3f)
         use = self.enabled(ctx)
         if not any(use):
             return mi.Float(0.0)
+        active = facing(si, active)
         inp = self.inputs(si, active)
         return self.lobes(use, self.probabilities(inp, si, use), inp, si, wo, active,
                           value=False)[1]
@@ -860,50 +1046,52 @@ class BRDF:
         use = self.enabled(ctx)
         if not any(use):
             return self.spectrum(mi.UnpolarizedSpectrum(0.0)), mi.Float(0.0)
+        active = facing(si, active)
         inp = self.inputs(si, active)
-        value, pdf = self.lobes(use, self.probabilities(inp, si, use), inp, si, wo, active)
-        return self.spectrum(value), pdf
+        values, pdf, up = self.lobes(use, self.probabilities(inp, si, use), inp, si, wo, active)
+        value = total(values, active if self.plan.behind else up)
+        return (mi.depolarizer(value) if mi.is_polarized else value), pdf
 
     # --- the lobes, summed -------------------------------------------------------
     def lobes(self, use: Lobes, probs, inp, si, wo, active, value=True, pdf=True):
-        """(eval, pdf) of the used lobes at wo (either None when not asked for):
-        each lobe's value clamped in scanline mode and weighted; the pdf the
-        mixture of the lobes' samplers with the selection probabilities."""
-        cos_o = mi.Frame3f.cos_theta(wo)
-        # A viewer or light below (or on) the surface gets no reflection.
-        active = mi.Bool(active) & (mi.Frame3f.cos_theta(si.wi) > HORIZON)
-        up = active & (cos_o > HORIZON)
-        f, p = mi.UnpolarizedSpectrum(0.0), mi.Float(0.0)
-        want_pdf = pdf
-        if pdf and self.sampling == "cosine":
-            p, pdf = mi.warp.square_to_cosine_hemisphere_pdf(wo), False
+        """(values, pdf, up) of the used lobes at wo, ``active`` holding the
+        viewer above the surface: ``values`` the list of the lobes' weighted
+        values (:func:`weighted`; summed and masked by :func:`total`), ``pdf``
+        the mixture of the lobes' samplers with the selection probabilities
+        ``probs`` (None: a single lobe's own density), 0 where the light is
+        below the surface; ``up`` where it is above. Either of the first two is
+        None when not asked for."""
+        plan = self.plan
+        up = active & (wo.z > HORIZON)
         w_d, w_s = self.lobe_weights(inp) if value else (None, None)
-        clamp = clamp01 if self.mode == "scanline" else (lambda x: x)
-        p_d, p_s, p_ms = probs if pdf else (None, None, None)
+        values = [] if value else None
+        p = None
+        lobe_pdfs = pdf
+        if pdf and plan.cosine:
+            p, lobe_pdfs = mi.warp.square_to_cosine_hemisphere_pdf(wo), False
+        p_d, p_s, p_ms = probs if probs is not None else (1.0, 1.0, 1.0)
         if use.diffuse:
             if value:
-                f += w_d * clamp(self.f_diffuse(inp, si, wo))
-            if pdf:
-                p += p_d * (mi.warp.square_to_uniform_hemisphere_pdf(wo)
-                            if self.diffuse_sampling() == "uniform"
-                            else mi.warp.square_to_cosine_hemisphere_pdf(wo))
+                values.append(weighted(self.f_diffuse(inp, si, wo), w_d, plan.scanline))
+            if lobe_pdfs:
+                p = mixed(p, p_d, mi.warp.square_to_uniform_hemisphere_pdf(wo) if plan.uniform
+                          else mi.warp.square_to_cosine_hemisphere_pdf(wo))
         if use.specular:
-            if value and pdf:
+            if value and lobe_pdfs:
                 f_s, p_s_wo = self.f_pdf_specular(inp, si, wo)
-                f += w_s * clamp(f_s)
-                p += p_s * p_s_wo
+                values.append(weighted(f_s, w_s, plan.scanline))
+                p = mixed(p, p_s, p_s_wo)
             elif value:
-                f += w_s * clamp(self.f_specular(inp, si, wo))
-            elif pdf:
-                p += p_s * self.pdf_specular(inp, si, wo)
+                values.append(weighted(self.f_specular(inp, si, wo), w_s, plan.scanline))
+            elif lobe_pdfs:
+                p = mixed(p, p_s, self.pdf_specular(inp, si, wo))
         if use.multiple:                 # hdr only
             if value:
-                f += (w_s if self.compensates == "specular" else w_d) \
-                    * self.f_multiple(inp, si, wo)
-            if pdf:
-                p += p_ms * mi.warp.square_to_cosine_hemisphere_pdf(wo)
-        f = dr.select(active if self.lit_from_behind() else up, f, 0.0) if value else None
-        return f, (dr.select(up, p, 0.0) if want_pdf else None)
+                values.append(weighted(self.f_multiple(inp, si, wo),
+                                       w_s if self.compensates == "specular" else w_d, False))
+            if lobe_pdfs:
+                p = mixed(p, p_ms, mi.warp.square_to_cosine_hemisphere_pdf(wo))
+        return values, (dr.select(up, p, 0.0) if pdf else None), up
 
     @staticmethod
     def spectrum(value):

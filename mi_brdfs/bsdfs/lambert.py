@@ -27,19 +27,22 @@ from types import SimpleNamespace
 import drjit as dr
 import mitsuba as mi
 
-from .base import BRDF, Param
+from .base import BRDF, Param, Scaled
 
 
 # ----------------------------------------------------------------------------
 #  The formulas (cos_o = d·n, the light's cosine)
 # ----------------------------------------------------------------------------
 
-def f(m_d, cos_o, mode: str):
-    """The Lambert lobe in eval convention: m_D·clamp(d·n) (scanline, the
-    lecture's f_r) or m_D/pi·cos(theta_o) (hdr). Also the diffuse lobe of
-    phong, blinn, ward and cook_torrance."""
-    scale = 1.0 if mode == "scanline" else dr.inv_pi
-    return m_d * scale * dr.fmax(cos_o, 0.0)
+def f(m_d, cos_o, mode: str) -> Scaled:
+    """The Lambert lobe in eval convention, as m_D times its shape: m_D·clamp(d·n)
+    (scanline, the lecture's f_r) or m_D/pi·cos(theta_o) (hdr). Also the diffuse
+    lobe of phong, blinn, ward and cook_torrance. In hdr mode, under the cosine
+    sampling the base gives it, f/pdf is m_D: ``ratio`` 1, so a sample of this
+    lobe alone weighs m_D exactly (as Mitsuba's ``diffuse``)."""
+    if mode == "scanline":
+        return Scaled(m_d, dr.fmax(cos_o, 0.0))
+    return Scaled(m_d, dr.inv_pi * dr.fmax(cos_o, 0.0), 1.0)
 
 
 def albedo(m_d, mode: str):
@@ -60,8 +63,8 @@ class Lambert(BRDF):
     def has_diffuse(self) -> bool:
         return not self.off("reflectance")
 
-    def evaluate(self, si, active):
-        return SimpleNamespace(m_d=self.m_reflectance.eval(si, active))
+    def eval_textures(self, si, active):
+        return SimpleNamespace(colour_d=self.m_reflectance.eval(si, active))
 
     def f_diffuse(self, inp, si, wo):
-        return f(inp.m_d, mi.Frame3f.cos_theta(wo), self.mode)
+        return f(inp.colour_d, mi.Frame3f.cos_theta(wo), self.mode)

@@ -60,8 +60,9 @@ the energy-preserving Oren-Nayar model EON (Portsmouth, Kutz & Hill, JCGT
 the diffuse lobe of OpenPBR, MaterialX and Cycles; a white surface reflects 1
 at every angle. Its roughness is r = B(σ)/A(σ) (the lecture's A, B: the ratio
 of the retro-reflective term to the Lambertian one, Fujii's mixing ratio), so
-σ in [0, π/2] maps to r in [0, 0.776] and σ = 0 stays Lambert. Per-bounce
-colour m_D.
+σ in [0, π/2] maps to r in [0, 0.776] and σ = 0 stays Lambert. Its colour
+enters as the paper defines it, per bounce (ρ_ms = m_D² E_avg /
+(1 - m_D (1 - E_avg))), not linearly: the one exception to linear colours.
 
 .. code-block:: xml
 
@@ -81,7 +82,8 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from .base import BRDF, Option, Param, Reader
+from . import energy
+from .base import BRDF, Option, Param, Reader, Scaled
 from .grid import Axis, Grid
 
 METHODS = ("exact", "table")
@@ -120,10 +122,10 @@ def sin_alpha_tan_beta(cos_i, cos_o):
 
 def oren_nayar(m_d, sigma, g, sa_tb, cos_o, mode: str):
     """eval of both modes: m_D·clamp(d·n)·(A + B G sin α tan β), /π in hdr
-    (before the scanline clamp, which the base applies)."""
+    (before the scanline clamp, which the base applies), as m_D times its shape."""
     a, b = a_b(sigma)
     scale = 1.0 if mode == "scanline" else dr.inv_pi
-    return m_d * (scale * dr.fmax(cos_o, 0.0) * (a + b * g * sa_tb))
+    return Scaled(m_d, scale * dr.fmax(cos_o, 0.0) * (a + b * g * sa_tb))
 
 
 # ----------------------------------------------------------------------------
@@ -167,13 +169,14 @@ def eon_roughness(sigma):
 def fon(m_d, r, wi, wo):
     """Fujii's Oren-Nayar (FON) in eval convention: m_D/π A (1 + r s/t) cos θ_o,
     s = ω_i·ω_o - μ_i μ_o, t = max(μ_i, μ_o) where s > 0 (else 1), A = 1/(1 + C1 r).
-    Written as A (μ_o + r s μ_o/t) with μ_o/t <= 1: finite at grazing."""
+    Written as A (μ_o + r s μ_o/t) with μ_o/t <= 1: finite at grazing. As m_D
+    times its shape."""
     mu_i, mu_o = dr.fmax(wi.z, 0.0), dr.fmax(wo.z, 0.0)
     s = wi.x * wo.x + wi.y * wo.y                      # = ω_i·ω_o - μ_i μ_o, exactly
     t = dr.fmax(mu_i, mu_o)
     ratio = dr.select(s > 0, mu_o / dr.select(t > 0, t, 1.0), mu_o)    # μ_o / t
     a = 1.0 / (1.0 + FON_C1 * r)
-    return m_d * (dr.inv_pi * a * (mu_o + r * s * ratio))
+    return Scaled(m_d, dr.inv_pi * a * (mu_o + r * s * ratio))
 
 
 def fon_albedo(mu, r):
@@ -233,31 +236,32 @@ class OrenNayar(BRDF):
     def has_diffuse(self) -> bool:
         return not self.off("reflectance")
 
-    def evaluate(self, si, active):
+    def eval_textures(self, si, active):
         sigma = self.m_sigma.eval_1(si, active)
-        return SimpleNamespace(m_d=self.m_reflectance.eval(si, active), sigma=sigma,
+        return SimpleNamespace(colour_d=self.m_reflectance.eval(si, active), sigma=sigma,
                                r=eon_roughness(sigma))
 
     def f_diffuse(self, inp, si, wo):
         if self.energy_compensation:               # EON: FON + the base's multiple scattering
-            return fon(inp.m_d, inp.r, si.wi, wo)
+            return fon(inp.colour_d, inp.r, si.wi, wo)
         cos_i, cos_o = mi.Frame3f.cos_theta(si.wi), mi.Frame3f.cos_theta(wo)
         if self.method == "table":
             sa_tb = self.table(cos_o, cos_i)
         else:
             sa_tb = sin_alpha_tan_beta(cos_i, cos_o)
         g = g_azimuth(si.wi, wo)
-        return oren_nayar(inp.m_d, inp.sigma, g, sa_tb, cos_o, self.mode)
+        return oren_nayar(inp.colour_d, inp.sigma, g, sa_tb, cos_o, self.mode)
 
     # --- energy compensation (EON) ------------------------------------------------
-    def albedo(self, inp, v):
-        return fon_albedo(mi.Frame3f.cos_theta(v), inp.r)
+    def ms_albedo(self, inp, v):
+        return 1.0 - fon_albedo(mi.Frame3f.cos_theta(v), inp.r)
 
-    def albedo_average(self, inp):
-        return fon_albedo_average(inp.r)
+    def ms_average(self, inp):
+        return 1.0 - fon_albedo_average(inp.r)
 
     def ms_colour(self, inp):
-        return inp.m_d
+        # EON's rho_ms: rho enters as the paper defines it, not linearly
+        return energy.ms_series(inp.colour_d, fon_albedo_average(inp.r))
 
     def describe(self) -> dict:
         fields = BRDF.describe(self)

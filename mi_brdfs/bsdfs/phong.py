@@ -36,12 +36,12 @@ albedo at normal incidence against the diffuse one: m_S vs m_D in hdr mode,
 2 m_S/(gamma + 1) vs m_D in scanline mode (channel means). With m_D = 0 there
 is no diffuse lobe, with m_S = 0 no specular one.
 
-**Energy compensation** (``energy_compensation``): the reciprocal
-multiple-scattering lobe of Kulla & Conty 2017 / Turquin 2019
-(:mod:`mi_brdfs.bsdfs.energy`) returns what the lobe loses below the
-horizon, so that a white lobe (m_S = 1) reflects 1 at every incident angle.
-Per-bounce colour m_S. E(μ, γ) is tabulated from the hdr lobe above over
-cos θ and log(1 + γ), γ in [0, 1e8].
+**Energy compensation** (``energy_compensation``): the reciprocal lobe of
+Kulla & Conty 2017 / Turquin 2019 (:mod:`mi_brdfs.bsdfs.energy`) returns
+what the lobe loses below the horizon (g = 1 - E), so that the specular lobe
+reflects m_S at every incident angle: m_S scales it linearly. E(μ, γ) is
+tabulated from the hdr lobe above over cos θ and log(1 + γ), γ in [0, 1e8],
+smooth (C2) in γ.
 
 .. code-block:: xml
 
@@ -60,7 +60,7 @@ import drjit as dr
 import mitsuba as mi
 
 from . import energy, lambert, powercos
-from .base import BRDF, Param, mean
+from .base import BRDF, Param, Scaled, mean
 from .grid import Axis
 
 MAX_EXPONENT = 1e8     # lobe ~1e-4 rad wide, still 1000x the float32 direction spacing
@@ -116,7 +116,8 @@ def pdf_lobe(wi, wo, gamma):
 # ----------------------------------------------------------------------------
 
 # Energy compensation: E(mu, gamma) of the hdr lobe (m_S = 1), over log(1 + gamma).
-ALBEDO_AXES = (Axis("mu", 0.0, 1.0, 33, "sqrt"), Axis("exponent", 0.0, MAX_EXPONENT, 49, "log1p"))
+ALBEDO_AXES = (Axis("mu", 0.0, 1.0, 33, "sqrt"),
+               Axis("exponent", 0.0, MAX_EXPONENT, 49, "log1p", smooth=True))
 
 
 class Phong(BRDF):
@@ -155,24 +156,24 @@ class Phong(BRDF):
     def has_specular(self) -> bool:
         return not self.off("specular_reflectance")
 
-    def evaluate(self, si, active):
+    def eval_textures(self, si, active):
         inp = SimpleNamespace(gamma=self.m_exponent.eval_1(si, active))
         if self.diffuse:
-            inp.m_d = self.m_diffuse_reflectance.eval(si, active)
+            inp.colour_d = self.m_diffuse_reflectance.eval(si, active)
         if self.specular:
-            inp.m_s = self.m_specular_reflectance.eval(si, active)
+            inp.colour_s = self.m_specular_reflectance.eval(si, active)
         return inp
 
     def f_diffuse(self, inp, si, wo):
-        return lambert.f(inp.m_d, mi.Frame3f.cos_theta(wo), self.mode)
+        return lambert.f(inp.colour_d, mi.Frame3f.cos_theta(wo), self.mode)
 
     def f_specular(self, inp, si, wo):
         spec = self.specular_scanline if self.mode == "scanline" else self.specular_hdr
-        return inp.m_s * spec(si.wi, wo, inp.gamma)
+        return Scaled(inp.colour_s, spec(si.wi, wo, inp.gamma))
 
     def selection_weights(self, inp, si):
-        w_d = mean(inp.m_d) if self.diffuse else mi.Float(0.0)
-        w_s = (mean(inp.m_s) * self.specular_weight(inp.gamma, self.mode)
+        w_d = mean(inp.colour_d) if self.diffuse else mi.Float(0.0)
+        w_s = (mean(inp.colour_s) * self.specular_weight(inp.gamma, self.mode)
                if self.specular else mi.Float(0.0))
         return w_d, w_s
 
@@ -190,5 +191,8 @@ class Phong(BRDF):
     def table_parameters(self, inp):
         return (inp.gamma,)
 
+    def table_sources(self):
+        return ("exponent",)
+
     def ms_colour(self, inp):
-        return inp.m_s
+        return inp.colour_s

@@ -232,15 +232,15 @@ class Toon(BRDF):
         # path tracer the surface is opaque and light from below never reaches it.
         return self.mode == "scanline"
 
-    def evaluate(self, si, active):
+    def eval_textures(self, si, active):
         inp = SimpleNamespace()
         if self.diffuse and self.m_diffuse_ramp is None:
-            inp.m_d1 = self.m_diffuse_reflectance.eval(si, active)
-            inp.m_d2 = self.m_diffuse_shade.eval(si, active)
+            inp.colour_d1 = self.m_diffuse_reflectance.eval(si, active)
+            inp.colour_d2 = self.m_diffuse_shade.eval(si, active)
             inp.t_d = self.m_diffuse_threshold.eval_1(si, active)
         if self.specular and self.m_specular_ramp is None:
-            inp.m_s1 = self.m_specular_reflectance.eval(si, active)
-            inp.m_s2 = self.m_specular_shade.eval(si, active)
+            inp.colour_s1 = self.m_specular_reflectance.eval(si, active)
+            inp.colour_s2 = self.m_specular_shade.eval(si, active)
             inp.t_s = self.m_specular_threshold.eval_1(si, active)
             inp.k = cone_opening(inp.t_s - 0.5 * self.m_smoothness, self.specular_model)
             # solid angle of the highlight: the cone (phong), ~4x the half-vector cone (blinn)
@@ -261,7 +261,7 @@ class Toon(BRDF):
         if self.m_diffuse_ramp is not None:
             colour = self.ramp(self.m_diffuse_ramp, si, cos_o)
         else:
-            colour = two_tone(cos_o, inp.t_d, self.m_smoothness, inp.m_d1, inp.m_d2)
+            colour = two_tone(cos_o, inp.t_d, self.m_smoothness, inp.colour_d1, inp.colour_d2)
         return colour * self.scale()
 
     def f_specular(self, inp, si, wo):
@@ -269,7 +269,7 @@ class Toon(BRDF):
         if self.m_specular_ramp is not None:
             colour = self.ramp(self.m_specular_ramp, si, c)
         else:
-            colour = two_tone(c, inp.t_s, self.m_smoothness, inp.m_s1, inp.m_s2)
+            colour = two_tone(c, inp.t_s, self.m_smoothness, inp.colour_s1, inp.colour_s2)
         lit = mi.Frame3f.cos_theta(wo) > 0               # no highlight from behind
         return dr.select(lit, colour * self.scale(), 0.0)
 
@@ -286,8 +286,8 @@ class Toon(BRDF):
         the uniform hemisphere, for m_S2 or a ramp)."""
         if self.m_specular_ramp is not None:
             return mi.Float(0.0)
-        w_cone = mean(inp.m_s1) * inp.omega
-        w_rest = mean(inp.m_s2) * 2.0 * dr.pi
+        w_cone = mean(inp.colour_s1) * inp.omega
+        w_rest = mean(inp.colour_s2) * 2.0 * dr.pi
         total = w_cone + w_rest
         return dr.select(total > 0, w_cone / dr.select(total > 0, total, 1.0), 1.0)
 
@@ -298,12 +298,12 @@ class Toon(BRDF):
                 w_d = self.ramp_weight(self.m_diffuse_ramp, si)
             else:
                 t = clamp(inp.t_d, 0.0, 1.0)
-                w_d = 2.0 * dr.pi * (mean(inp.m_d1) * (1.0 - t) + mean(inp.m_d2) * t)
+                w_d = 2.0 * dr.pi * (mean(inp.colour_d1) * (1.0 - t) + mean(inp.colour_d2) * t)
         if self.specular:
             if self.m_specular_ramp is not None:
                 w_s = self.ramp_weight(self.m_specular_ramp, si)
             else:
-                w_s = mean(inp.m_s1) * inp.omega + mean(inp.m_s2) * 2.0 * dr.pi
+                w_s = mean(inp.colour_s1) * inp.omega + mean(inp.colour_s2) * 2.0 * dr.pi
         return w_d, w_s
 
     # --- specular sampling: highlight cone + uniform hemisphere ----------------

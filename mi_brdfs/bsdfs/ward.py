@@ -55,11 +55,12 @@ tan²delta is exponential with rate A(phi) = cos²phi/a_t² + sin²phi/a_b²)::
 and wo = reflect(w_r, h) has p(wo) = p_h(h) / (4 wo·h). The lobe is picked in
 proportion to mean(m_D) (pi·mean(m_D) in scanline mode) vs mean(m_S).
 
-**Energy compensation** (``energy_compensation``): the reciprocal
-multiple-scattering lobe of Kulla & Conty 2017 / Turquin 2019
-(:mod:`mi_brdfs.bsdfs.energy`), so that a white lobe (m_S = 1) reflects 1 at
-every incident angle. Per-bounce colour m_S. E is tabulated from the hdr lobe
-over (cos θ, α) when isotropic and (cos θ, sin²φ, α_u, α_v) when anisotropic;
+**Energy compensation** (``energy_compensation``): the reciprocal lobe of
+Kulla & Conty 2017 / Turquin 2019 (:mod:`mi_brdfs.bsdfs.energy`) returns
+what the lobe loses below the horizon (g = 1 - E), so that the specular lobe
+reflects m_S at every incident angle (m_S scales it linearly). E is
+tabulated from the hdr lobe over (cos θ, α) when isotropic and (cos θ,
+sin²φ, α_u, α_v) when anisotropic, α to ∞, smooth (C2) in the roughness;
 where Ward's own albedo exceeds 1 (within a fraction of a degree of the
 horizon) E is clamped to 1: nothing is added there.
 
@@ -80,7 +81,7 @@ import drjit as dr
 import mitsuba as mi
 
 from . import energy, lambert, microfacet as mf
-from .base import BRDF, Option, Param, Reader, mean
+from .base import BRDF, Option, Param, Reader, Scaled, mean
 from .grid import Axis
 
 ALPHA_MIN = 1e-4      # smallest roughness used (0 is clamped here)
@@ -191,11 +192,14 @@ def sample_lobe(wi, sample2, alpha_t, alpha_b):
 
 
 # Energy compensation: E of the specular lobe (m_S = 1) over (mu, alpha) when
-# isotropic, over (mu, sin²phi, alpha_u, alpha_v) when anisotropic.
-ALPHA_AXIS = Axis("alpha", 0.0, 1.0, 25, "sqrt")
+# isotropic, over (mu, sin²phi, alpha_u, alpha_v) when anisotropic; the
+# roughness axes reach infinity (where E = 0), smooth (C1) in the roughness.
+INF = float("inf")
+ALPHA_AXIS = Axis("alpha", 0.0, INF, 33, "ratio", smooth=True)
 ISOTROPIC_AXES = (Axis("mu", 0.0, 1.0, 33, "sqrt"), ALPHA_AXIS)
 ANISOTROPIC_AXES = (Axis("mu", 0.0, 1.0, 25, "sqrt"), Axis("sin2phi", 0.0, 1.0, 9),
-                    Axis("alpha_u", 0.0, 1.0, 17, "sqrt"), Axis("alpha_v", 0.0, 1.0, 17, "sqrt"))
+                    Axis("alpha_u", 0.0, INF, 25, "ratio", smooth=True),
+                    Axis("alpha_v", 0.0, INF, 25, "ratio", smooth=True))
 
 
 def _clamped(f):
@@ -208,9 +212,9 @@ ISOTROPIC = energy.AlbedoSpec(
     f=_clamped(lambda wi, wo, a: specular_vectors(wi, wo, a, a)),
     sample=_clamped(lambda wi, u, a: sample_lobe(wi, u, a, a)),
     pdf=_clamped(lambda wi, wo, a: pdf_specular(wi, wo, a, a)))
-ANISOTROPIC = energy.AlbedoSpec(
+ANISOTROPIC = energy.AlbedoSpec(                  # 140,625 nodes: 128² samples (~1 min)
     "ward/anisotropic", ANISOTROPIC_AXES, f=_clamped(specular_vectors),
-    sample=_clamped(sample_lobe), pdf=_clamped(pdf_specular))
+    sample=_clamped(sample_lobe), pdf=_clamped(pdf_specular), samples=128)
 
 
 class Ward(BRDF):
@@ -257,7 +261,7 @@ class Ward(BRDF):
     def has_specular(self) -> bool:
         return not self.off("specular_reflectance")
 
-    def evaluate(self, si, active):
+    def eval_textures(self, si, active):
         if self.anisotropic:
             alpha_t = dr.fmax(self.m_alpha_u.eval_1(si, active), ALPHA_MIN)
             alpha_b = dr.fmax(self.m_alpha_v.eval_1(si, active), ALPHA_MIN)
@@ -265,20 +269,20 @@ class Ward(BRDF):
             alpha_t = alpha_b = dr.fmax(self.m_alpha.eval_1(si, active), ALPHA_MIN)
         inp = SimpleNamespace(alpha_t=alpha_t, alpha_b=alpha_b)
         if self.diffuse:
-            inp.m_d = self.m_diffuse_reflectance.eval(si, active)
+            inp.colour_d = self.m_diffuse_reflectance.eval(si, active)
         if self.specular:
-            inp.m_s = self.m_specular_reflectance.eval(si, active)
+            inp.colour_s = self.m_specular_reflectance.eval(si, active)
         return inp
 
     def f_diffuse(self, inp, si, wo):
-        return lambert.f(inp.m_d, mi.Frame3f.cos_theta(wo), self.mode)
+        return lambert.f(inp.colour_d, mi.Frame3f.cos_theta(wo), self.mode)
 
     def f_specular(self, inp, si, wo):
-        return inp.m_s * SPECULAR[self.formula](si.wi, wo, inp.alpha_t, inp.alpha_b)
+        return Scaled(inp.colour_s, SPECULAR[self.formula](si.wi, wo, inp.alpha_t, inp.alpha_b))
 
     def selection_weights(self, inp, si):
-        w_d = lambert.albedo(mean(inp.m_d), self.mode) if self.diffuse else mi.Float(0.0)
-        w_s = mean(inp.m_s) if self.specular else mi.Float(0.0)
+        w_d = lambert.albedo(mean(inp.colour_d), self.mode) if self.diffuse else mi.Float(0.0)
+        w_s = mean(inp.colour_s) if self.specular else mi.Float(0.0)
         return w_d, w_s
 
     # --- specular sampling ----------------------------------------------------
@@ -295,5 +299,8 @@ class Ward(BRDF):
     def table_parameters(self, inp):
         return (inp.alpha_t, inp.alpha_b) if self.anisotropic else (inp.alpha_t,)
 
+    def table_sources(self):
+        return ("alpha_u", "alpha_v") if self.anisotropic else ("alpha",)
+
     def ms_colour(self, inp):
-        return inp.m_s
+        return inp.colour_s

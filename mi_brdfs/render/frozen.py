@@ -22,9 +22,10 @@ What a replay cannot see, and how it is handled here:
 - the seed: passed as an opaque ``mi.UInt32``. A Python int is part of the
   recording's key (a new recording per seed); a literal would be made opaque
   only at the second call (two recordings).
-- the plugins' Python-side choices, e.g. which lobes exist (decided in
-  ``parameters_changed`` from the parameter values): the flags of every
-  shape's BSDF are part of the key (``state_fn``), so a change re-records
+- the plugins' Python-side choices, e.g. which lobes exist and which
+  parameters are folded as numbers (decided in ``parameters_changed`` from
+  the parameter values): the flags of every shape's BSDF and the plugins'
+  ``trace_key`` are part of the key (``state_fn``), so a change re-records
   instead of replaying stale code.
 - the first render of a fresh scene initialises state of its sensor and
   emitters that the next call sees as a changed input: a function frozen on a
@@ -63,10 +64,12 @@ def why(error: Exception) -> str:
     return f"{type(cause).__name__}: " + " ".join(str(cause).replace("record(): ", "").split())
 
 
-def bsdf_flags(scene, *args, **kwargs) -> tuple[int, ...]:
-    """The flags of every shape's BSDF: the Python-side lobe choices a replay
-    cannot see (``state_fn`` of the frozen functions)."""
-    return tuple(int(shape.bsdf().flags()) for shape in scene.shapes() if shape.bsdf())
+def bsdf_flags(scene, *args, **kwargs) -> tuple:
+    """The flags of every shape's BSDF, and for a plugin of this package the
+    rest of what its calls trace (``BRDF.trace_key``): the Python-side choices
+    a replay cannot see (``state_fn`` of the frozen functions)."""
+    return tuple((int(bsdf.flags()), getattr(bsdf, "trace_key", tuple)())
+                 for bsdf in (shape.bsdf() for shape in scene.shapes()) if bsdf)
 
 
 def warm_up(scene) -> None:

@@ -22,7 +22,7 @@ def _si(theta_i_deg: float, phi_i_deg: float = 180.0):
     return si
 
 
-def evaluate(bsdf, theta_i_deg: float, wo: np.ndarray, phi_i_deg: float = 180.0) -> np.ndarray:
+def eval_at_viewer(bsdf, theta_i_deg: float, wo: np.ndarray, phi_i_deg: float = 180.0) -> np.ndarray:
     """eval(wi, wo) (f·cos theta_o, per channel) for the viewer at theta_i and an (N, 3) array wo."""
     import mitsuba as mi
     value = bsdf.eval(mi.BSDFContext(), _si(theta_i_deg, phi_i_deg),
@@ -35,7 +35,7 @@ def plane_of_incidence(bsdf, theta_i_deg: float, n: int = 359):
     for directions wo in the plane of incidence. The viewer is at -theta_i."""
     theta_o = np.radians(np.linspace(-89.5, 89.5, n))
     wo = np.stack([np.sin(theta_o), np.zeros(n), np.cos(theta_o)], axis=1)
-    return theta_o, evaluate(bsdf, theta_i_deg, wo).mean(axis=1)
+    return theta_o, eval_at_viewer(bsdf, theta_i_deg, wo).mean(axis=1)
 
 
 def hemisphere(bsdf, theta_i_deg: float, n: int = 96):
@@ -45,7 +45,7 @@ def hemisphere(bsdf, theta_i_deg: float, n: int = 96):
     phi = np.linspace(0, 2 * math.pi, 4 * n)
     t, p = np.meshgrid(theta, phi, indexing="ij")
     wo = np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)], axis=-1).reshape(-1, 3)
-    return t, p, evaluate(bsdf, theta_i_deg, wo).mean(axis=1).reshape(t.shape)
+    return t, p, eval_at_viewer(bsdf, theta_i_deg, wo).mean(axis=1).reshape(t.shape)
 
 
 def directional_albedo(bsdf, angles, strata: tuple[int, int] = (512, 2048), seed: int = 7,

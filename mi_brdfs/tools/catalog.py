@@ -60,9 +60,11 @@ class Furnace:
     points: int = 1024             # the quadrature's n x n strata
 
 
-def preserves(label: str, config: dict, thetas=THETAS_COMPENSATED, **kw) -> Furnace:
-    """Albedo 1 within 1 % (energy preserving)."""
-    return Furnace(label, config, lo=1.0, hi=1.0, tol=0.01, thetas=thetas, **kw)
+def preserves(label: str, config: dict, thetas=THETAS_COMPENSATED, value: float = 1.0,
+              **kw) -> Furnace:
+    """Albedo ``value`` within 1 % (energy preserving: 1 for a white surface,
+    m_S for a compensated lobe of colour m_S, whose colour scales it linearly)."""
+    return Furnace(label, config, lo=value, hi=value, tol=0.01 * value, thetas=thetas, **kw)
 
 
 @dataclass
@@ -304,7 +306,10 @@ def _exponent_model(name: str) -> Entry:
         + [preserves(f"compensated, γ = {g:g}", {**white, "exponent": g,
                                                   "energy_compensation": True},
                      points=2048 if g >= 1e3 else 1024)
-           for g in (1.0, 10.0, 100.0, 1e4)],
+           for g in (1.0, 10.0, 100.0, 1e4)]
+        + [preserves(f"compensated, m_S = 0.5, γ = {g:g}: reflects 0.5",
+                     {**white, "specular_reflectance": 0.5, "exponent": g,
+                      "energy_compensation": True}, value=0.5) for g in (10.0, 100.0)],
         extremes=[{**b, "exponent": g, "mode": mode, "diffuse_reflectance": m_d,
                    "specular_reflectance": m_s}
                   for g in (0.0, 1.0, 1e4, 1e6, 1e8) for mode in ("hdr", "scanline")
@@ -364,7 +369,12 @@ def _ward(name: str) -> Entry:
         + [preserves(f"compensated, α {label}", {**white, **alpha, "energy_compensation": True},
                      phis=(0.0, 90.0) if "alpha_u" in alpha else (0.0,))
            for label, alpha in (("0.05", {"alpha": 0.05}), ("0.3", {"alpha": 0.3}),
-                                ("0.05 × 0.3", {"alpha_u": 0.05, "alpha_v": 0.3}))],
+                                ("0.05 × 0.3", {"alpha_u": 0.05, "alpha_v": 0.3}),
+                                ("2 (beyond 1)", {"alpha": 2.0}),
+                                ("0.3 × 3 (beyond 1)", {"alpha_u": 0.3, "alpha_v": 3.0}))]
+        + [preserves("compensated, m_S = 0.5, α 0.3: reflects 0.5",
+                     {**white, "specular_reflectance": 0.5, "alpha": 0.3,
+                      "energy_compensation": True}, value=0.5)],
         extremes=[{**w, "alpha_u": at, "alpha_v": ab, "mode": mode, "formula": formula,
                    "diffuse_reflectance": m_d, "specular_reflectance": 1.0}
                   for at, ab in WARD_ALPHAS for mode in ("hdr", "scanline")
@@ -452,6 +462,17 @@ def _cook_torrance(name: str) -> Entry:
                     f"compensated, {d}, {g}, α = {a}",
                     {**c, "distribution": d, "geometry": g, "alpha": a, "k": 0.0, "f0": 1.0,
                      "specular_reflectance": 1.0, "energy_compensation": True}))
+    for d in ("beckmann", "ggx"):                  # the roughness they accept beyond 1
+        for g in GEOMETRIES:
+            for a in (1.5, 3.0, 10.0, 30.0, 1e3):
+                furnace.append(preserves(
+                    f"compensated, {d}, {g}, α = {a} (beyond 1)",
+                    {**c, "distribution": d, "geometry": g, "alpha": a, "k": 0.0, "f0": 1.0,
+                     "specular_reflectance": 1.0, "energy_compensation": True}))
+    furnace.append(preserves("compensated, ggx, smith, α = 0.5, f0 = 1, m_S = 0.5: reflects 0.5",
+                             {**c, "distribution": "ggx", "geometry": "smith", "alpha": 0.5,
+                              "k": 0.0, "f0": 1.0, "specular_reflectance": 0.5,
+                              "energy_compensation": True}, value=0.5))
     furnace.append(preserves("compensated, ggx, smith, α = 0.5, k = 0.5, m_D = m_S = 1",
                              {**c, "distribution": "ggx", "geometry": "smith", "alpha": 0.5,
                               "k": 0.5, "f0": 1.0, "diffuse_reflectance": 1.0,
@@ -462,7 +483,8 @@ def _cook_torrance(name: str) -> Entry:
                 for mode in ("hdr", "scanline") for d in DISTRIBUTIONS for g in GEOMETRIES]
     extremes += [{**c, "alpha": a, "k": 0.0, "distribution": d, "geometry": g,
                   "energy_compensation": True}
-                 for a in (0.0, 1.0) for d in DISTRIBUTIONS for g in GEOMETRIES]
+                 for a in (0.0, 1.0, 1e3) for d in DISTRIBUTIONS for g in GEOMETRIES
+                 if a <= 1.0 or d != "blinn"]
     return Entry(
         chi2=chi2, consistency=consistency, furnace=furnace, extremes=extremes,
         interior=[{**c, "distribution": d, "geometry": "smith", "alpha": 0.4, "k": 0.4,
@@ -673,7 +695,8 @@ BENCH_ENERGY: list[tuple[str, dict]] = [
 
 # Many spheres, each with its own material (materials, frozen): kind -> the
 # material of the sphere at place t in [0, 1] of the grid; and the pairs
-# (plugin, built-in) compared.
+# (plugin, built-in) compared, each with its floor: the same BSDF as a bare
+# Python mi.BSDF (tools/bench/floor.py).
 BENCH_MATERIALS: dict[str, Callable[[float], dict]] = {
     "cook_torrance": lambda t: {"type": "cook_torrance", "distribution": "ggx",
                                 "geometry": "smith", "f0": 1.0, "k": 0.0,
@@ -684,5 +707,14 @@ BENCH_MATERIALS: dict[str, Callable[[float], dict]] = {
                           "reflectance": {"type": "rgb", "value": [0.2 + 0.6 * t, 0.5, 0.8 - 0.6 * t]}},
     "diffuse": lambda t: {"type": "diffuse",
                           "reflectance": {"type": "rgb", "value": [0.2 + 0.6 * t, 0.5, 0.8 - 0.6 * t]}},
+    "floor_ggx": lambda t: {"type": "bench_floor_ggx", "alpha": 0.05 + 0.5 * t},
+    "floor_diffuse": lambda t: {"type": "bench_floor_diffuse",
+                                "reflectance": {"type": "rgb", "value": [0.2 + 0.6 * t, 0.5, 0.8 - 0.6 * t]}},
 }
 BENCH_MATERIAL_PAIRS = [("cook_torrance", "roughconductor"), ("lambert", "diffuse")]
+BENCH_FLOORS = {"cook_torrance": "floor_ggx", "lambert": "floor_diffuse"}    # plugin -> floor
+# The floor beside a BENCH_BUILTIN pair in the tracing group (the same BSDF).
+BENCH_TRACING_FLOORS: dict[str, dict] = {
+    BENCH_BUILTIN[0][0]: {"type": "bench_floor_ggx", "alpha": 0.3},
+    BENCH_BUILTIN[2][0]: {"type": "bench_floor_diffuse", "reflectance": 0.6},
+}

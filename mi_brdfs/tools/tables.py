@@ -1,15 +1,25 @@
 """Build and check the shipped albedo tables of :mod:`mi_brdfs.bsdfs.energy`.
 
-    python -m mi_brdfs.tools.tables            # rebuild mi_brdfs/bsdfs/data/albedo.npz
-    python -m mi_brdfs.tools.tables --check    # measure the tables' errors
+    python -m mi_brdfs.tools.tables                 # rebuild mi_brdfs/bsdfs/data/albedo.npz
+    python -m mi_brdfs.tools.tables --only walk/ggx # rebuild some tables, keep the others
+    python -m mi_brdfs.tools.tables --check         # measure the tables' errors
 
-``--check`` measures, for every table, (1) the quadrature error: the largest
-difference between the shipped values and a fresh build with half the
-samples per axis, and (2) the interpolation error: the largest difference
-between E computed at the centres of the cells (every axis refined 2x) and
-the table's multilinear interpolation there, over the whole table and over
-the incident angles up to 85° (cos θ >= 0.087). The compensated albedo is
-1 + (E - E~), so (2) bounds the white furnace's deviation from 1.
+Single-scattering tables (E, by quadrature over each model's sampler) take
+seconds; the random-walk tables (W, :mod:`.groundtruth`) minutes.
+
+``--check`` measures, for every single-scattering table, (1) the quadrature
+error: the largest difference between the shipped values and a fresh build
+with half the samples per axis, and (2) the interpolation error: the largest
+difference between E computed at the centres of the cells (every axis refined
+2x) and the table's interpolation there, over the whole table and over the
+incident angles up to 85° (cos θ >= 0.087), where the model accepts the
+parameters (Blinn: α <= 1). The white compensated albedo is 1 + (E - E~), so
+(2) bounds the white furnace's deviation from 1. For every walk table it
+measures (1) the Monte-Carlo noise: the difference between the shipped
+values and a walk with another seed and a quarter of the paths, on a few μ
+rows, and (2) the interpolation error of W along α and F0 at cell centres of
+those rows (with the same seed: the walk's noise, correlated between nodes,
+mostly cancels).
 """
 from __future__ import annotations
 
@@ -22,6 +32,7 @@ from dataclasses import replace
 import numpy as np
 
 MU_85 = 0.0871557      # cos 85°
+CHECK_ROWS = (4, 12, 20, 28)   # the μ rows of a walk table that --check walks again
 
 
 def refined(spec):
@@ -30,8 +41,9 @@ def refined(spec):
     return replace(spec, axes=axes)
 
 
-def interpolation_error(spec, table, samples: int) -> tuple[float, float]:
-    """(max |E - E~| at cell centres, the same for cos θ >= cos 85°)."""
+def interpolation_error(spec, table, samples: int, bounded: bool = False) -> tuple[float, float]:
+    """(max |E - E~| at cell centres, the same for cos θ >= cos 85°);
+    ``bounded``: only where the parameters of unbounded axes are <= 1."""
     import drjit as dr
     import mitsuba as mi
 
@@ -45,8 +57,50 @@ def interpolation_error(spec, table, samples: int) -> tuple[float, float]:
     interp = np.asarray(table.grid(*[mi.Float(m) for m in mesh])).reshape(exact.shape)
     dr.eval()
     err = np.abs(exact - np.clip(interp, 0, 1))
+    if spec.valid_up_to is not None:        # beyond: extrapolated, not the model's
+        k = spec.directions
+        keep = points[k] <= spec.valid_up_to
+        err = np.take(err, np.flatnonzero(keep), axis=k)
+        points[k] = points[k][keep]
+    if bounded:
+        for k, axis in enumerate(spec.axes):
+            if np.isinf(axis.hi):
+                keep = points[k] <= 1.0
+                err = np.take(err, np.flatnonzero(keep), axis=k)
     up = points[0] >= MU_85
     return float(err.max()), float(err[up].max())
+
+
+def check_walk(spec, paths: int, log) -> str:
+    """(MC noise, interpolation error along alpha and F0) of a walk table, on CHECK_ROWS."""
+    import mitsuba as mi
+
+    from ..bsdfs import energy
+    from . import groundtruth
+    shipped = energy.shipped(spec)
+    rows = list(CHECK_ROWS)
+    again = groundtruth.table(spec, paths=paths, seed=energy.WALK_SEED + 1, rows=rows)
+    walked = spec.axes[1].nodes() <= spec.alpha_max
+    noise = np.abs(again[rows][:, walked] - shipped[rows][:, walked]).max()
+    # cell centres in alpha (between walked nodes) and F0, against the interpolation
+    fine = refined(spec)
+    a_mid = fine.axes[1].nodes()[1::2]
+    a_mid = a_mid[a_mid < spec.axes[1].nodes()[walked][-1]]
+    f_mid = fine.axes[2].nodes()[1::2]
+    grid = energy.Table(spec.axes, shipped).grid
+    worst = 0.0
+    for i in rows:
+        mu = spec.axes[0].nodes()[i]
+        walked = groundtruth.albedo(spec.distribution, max(mu, energy.MU_MIN), a_mid, f_mid,
+                                    paths, energy.WALK_SEED)
+        A, F = np.meshgrid(a_mid, f_mid, indexing="ij")
+        interp = np.asarray(grid(mi.Float(np.full(A.size, mu)), mi.Float(A.ravel()),
+                                 mi.Float(F.ravel()))).reshape(A.shape)
+        worst = max(worst, float(np.abs(interp - walked).max()))
+        log(f"  {spec.name}: checked mu row {i}")
+    return (f"{spec.name}: axes {'x'.join(str(a.n) for a in spec.axes)}; Monte-Carlo noise "
+            f"{noise:.1e} ({paths} paths vs the shipped {energy.WALK_PATHS}, rows {rows}); "
+            f"interpolation error along alpha and F0 {worst:.1e} (where walked)")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -60,26 +114,62 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m mi_brdfs.tools.tables",
                                      description=main.__doc__)
     parser.add_argument("--check", action="store_true", help="measure the shipped tables' errors")
-    parser.add_argument("--samples", type=int, default=energy.SAMPLES,
-                        help=f"quadrature samples per axis (default {energy.SAMPLES})")
+    parser.add_argument("--only", nargs="+", metavar="NAME",
+                        help="only these tables (names as printed; the others are kept)")
+    parser.add_argument("--samples", type=int,
+                        help="quadrature samples per axis (default: each table's, "
+                             f"{energy.SAMPLES} for most)")
+    parser.add_argument("--paths", type=int, default=energy.WALK_PATHS,
+                        help=f"random-walk paths per node (default {energy.WALK_PATHS}; "
+                             "--check: a quarter of it)")
     args = parser.parse_args(argv)
     if not dr.is_jit_v(mi.Float):
         mi.set_variant("llvm_ad_rgb")
+    specs = [s for s in energy.specs() if not args.only or s.name in args.only]
+    unknown = set(args.only or ()) - {s.name for s in specs}
+    if unknown:
+        parser.error(f"unknown tables {sorted(unknown)}; valid: "
+                     f"{', '.join(s.name for s in energy.specs())}")
+    log = lambda text: print(text, file=sys.stderr)
     out = {}
-    for spec in energy.specs():
+    if args.only and os.path.exists(energy.DATA):
+        with np.load(energy.DATA) as f:
+            out = {k: f[k] for k in f.files}
+    for spec in specs:
         start = time.perf_counter()
+        walk = isinstance(spec, energy.WalkSpec)
+        if args.check and walk:
+            print(check_walk(spec, max(1000, args.paths // 4), log)
+                  + f" [{time.perf_counter() - start:.0f} s]")
+            continue
         if args.check:
             shipped = energy.table(spec)
-            half = energy.build(spec, args.samples // 2)
-            quad = float(np.max(np.abs(half - shipped.grid.values)))
-            inter, inter85 = interpolation_error(spec, shipped, max(16, args.samples // 4))
+            samples = args.samples or spec.samples
+            half = energy.build(spec, samples // 2)
+            diff = np.abs(half - shipped.grid.values)
+            if spec.valid_up_to is not None:    # beyond: extrapolated, not the model's
+                k = spec.directions
+                diff = np.take(diff, np.flatnonzero(spec.axes[k].nodes() <= spec.valid_up_to),
+                               axis=k)
+            quad = float(np.max(diff))
+            inter, inter85 = interpolation_error(spec, shipped, max(16, samples // 4))
+            unbounded = any(np.isinf(a.hi) for a in spec.axes)
+            bounded = (f"; alpha <= 1 up to 85 deg: "
+                       f"{interpolation_error(spec, shipped, max(16, samples // 4), True)[1]:.1e}"
+                       if unbounded else "")
             print(f"{spec.name}: axes {'x'.join(str(a.n) for a in spec.axes)}; quadrature "
                   f"error {quad:.1e}; interpolation error {inter:.1e} "
-                  f"(up to 85 deg: {inter85:.1e}) [{time.perf_counter() - start:.0f} s]")
+                  f"(up to 85 deg: {inter85:.1e}{bounded}) [{time.perf_counter() - start:.0f} s]")
             continue
-        out[spec.name] = energy.build(spec, args.samples)
-        print(f"{spec.name}: {out[spec.name].size} nodes x {args.samples}^2 samples, "
-              f"{time.perf_counter() - start:.1f} s", file=sys.stderr)
+        if walk:
+            from . import groundtruth
+            out[spec.name] = groundtruth.table(spec, paths=args.paths, log=log)
+            what = f"{args.paths} paths"
+        else:
+            out[spec.name] = energy.build(spec, args.samples)
+            what = f"{args.samples or spec.samples}^2 samples"
+        log(f"{spec.name}: {out[spec.name].size} nodes x {what}, "
+            f"{time.perf_counter() - start:.1f} s")
     if args.check:
         return 0
     os.makedirs(os.path.dirname(energy.DATA), exist_ok=True)

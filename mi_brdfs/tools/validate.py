@@ -26,8 +26,9 @@ adds the three and one line in :func:`validate`):
    and where. Models with ``energy_compensation`` get a third curve beside the
    two modes, hdr compensated. Where the catalog promises albedo 1 (a white
    energy-preserving configuration, :func:`.catalog.promises_one`) the albedo
-   must be 1 within 1 % up to 85°; coloured lobes stay below 1, since each
-   bounce between microfacets takes its colour again. The scan-line modes are
+   must be 1 within 1 % up to 85°; a lobe's colour (m_S) scales its
+   compensated albedo linearly, Fresnel is the only per-bounce reflectance.
+   The scan-line modes are
    the lecture's clamped formulas: their albedo above 1 is documented
    behaviour, not a failure.
 3. **Sampling** — Mitsuba's χ² test (p-value) of every sampler of the
@@ -41,6 +42,9 @@ adds the three and one line in :func:`validate`):
    a wrong pdf.
 4. **Lobes** — eval (f·cos theta_o) in the plane of incidence for several
    incident angles, both modes, as polar plots.
+5. **Ground truth** — compensated ``cook_torrance`` against the random walk on
+   the Smith microsurface (:mod:`.groundtruth`): albedo against angle and BRDF
+   slices, with the largest difference per D x G against its bound.
 
 The report opens with a summary: every check with its status — pass, fail,
 documented behaviour (what the scan-line modes and Schlick's approximation do
@@ -228,7 +232,7 @@ def fresnel_section(seed: int = 5) -> list[dict]:
     cos_d = np.sum(wi * h, axis=1)
     ratio = fresnel_dielectric(cos_d, ETA) / fresnel_schlick(cos_d, F0_GLASS)
 
-    def evaluate(config):
+    def eval_pairs(config):
         si = dr.zeros(mi.SurfaceInteraction3f, FRESNEL_PAIRS)
         si.wi = mi.Vector3f(wi[:, 0], wi[:, 1], wi[:, 2])
         value = mi.load_dict(config).eval(mi.BSDFContext(), si,
@@ -237,9 +241,9 @@ def fresnel_section(seed: int = 5) -> list[dict]:
 
     rows = []
     for alpha in FRESNEL_ALPHAS:
-        ours = evaluate({"type": "cook_torrance", "k": 0.0, "f0": F0_GLASS, "geometry": "smith",
+        ours = eval_pairs({"type": "cook_torrance", "k": 0.0, "f0": F0_GLASS, "geometry": "smith",
                          "distribution": "ggx", "alpha": alpha})
-        builtin = evaluate({"type": "roughplastic", "distribution": "ggx", "alpha": alpha,
+        builtin = eval_pairs({"type": "roughplastic", "distribution": "ggx", "alpha": alpha,
                             "diffuse_reflectance": 0.0, "int_ior": ETA, "ext_ior": 1.0})
         scale = float(builtin.max())
         rows.append({"id": f"cook_torrance-roughplastic-fresnel-{alpha:g}",
@@ -545,6 +549,16 @@ def furnace_checks(results: dict) -> list[dict]:
     return out
 
 
+def groundtruth_checks(results: dict) -> list[dict]:
+    """Compensated cook_torrance against the random walk, per D x G."""
+    return [_check(f"groundtruth/{r['distribution']}/{r['geometry']}", "ground truth",
+                   f"compensated cook_torrance {r['distribution']}/{r['geometry']} "
+                   f"against the walk on {r['walk']}", r["relative"] <= r["bound"],
+                   f"largest relative difference {100 * r['relative']:.1f} % "
+                   f"(bound {100 * r['bound']:g} %)", r["relative"])
+            for r in results.get("groundtruth", [])]
+
+
 def sampling_checks(results: dict) -> list[dict]:
     out = []
     for r in results.get("sampling", []):
@@ -561,7 +575,7 @@ def sampling_checks(results: dict) -> list[dict]:
     return out
 
 
-CHECKS = (equivalence_checks, furnace_checks, sampling_checks)   # in the summary's order
+CHECKS = (equivalence_checks, furnace_checks, sampling_checks, groundtruth_checks)   # in the summary's order
 
 
 def checks(results: dict) -> list[dict]:
@@ -680,8 +694,8 @@ def furnace_html(results: dict) -> str:
     parts = ["<h2>2. White furnace</h2><p>Rows <i>hdr, compensated</i> are the same "
              "configuration with <code>energy_compensation</code>: its albedo is 1 "
              "where its lobes are white (checked against 1 where the catalog promises "
-             "it); with a coloured or weaker lobe (e.g. m_S = 0.5) each extra bounce "
-             "takes that colour again (Kulla &amp; Conty 2017), so it stays below 1. "
+             "it); a lobe's colour scales its compensated albedo linearly (m_S = 0.5 "
+             "reflects 0.5), Fresnel being the only per-bounce reflectance (section 5). "
              "The scan-line rows are the lecture's clamped formulas (no 1/π): an albedo "
              "above 1 there is by design.</p><table><tr><th>model</th><th>configuration</th>"
              "<th>mode</th><th>max albedo</th><th>at θ_i</th><th>mean</th><th>min</th>"
@@ -744,7 +758,13 @@ def lobes_html(results: dict) -> str:
                       for r in results["lobes"]) + "</div>")
 
 
-SECTIONS_HTML = (equivalence_html, furnace_html, sampling_html, lobes_html)
+def groundtruth_html(results: dict) -> str:
+    from . import groundtruth      # (needs scipy: the reports extra)
+    return ("<h2>5. Ground truth: the random walk</h2>"
+            + groundtruth.report_html(results.get("groundtruth", [])))
+
+
+SECTIONS_HTML = (equivalence_html, furnace_html, sampling_html, lobes_html, groundtruth_html)
 
 
 def _html(results: dict) -> str:
@@ -786,6 +806,9 @@ def validate(out_dir: str, quick: bool = False, log: Callable[[str], None] = pri
         results["negative"] = negative_section(size, catalog.NEGATIVE, count)
         log("lobes ...")
         results["lobes"] = lobe_section(tmp, catalog.LOBES)
+        log("ground truth ...")
+        from . import groundtruth
+        results["groundtruth"] = groundtruth.report_section(tmp, quick)
         results["checks"] = checks(results)
         results["summary"] = summary(results["checks"])
         results["seconds"] = time.perf_counter() - start

@@ -19,6 +19,8 @@ parameter declarations (``PARAMS``, ``OPTIONS``):
 10. every property form a Mitsuba scene gives a parameter, read as Mitsuba's
     own plugins read it, and direct calls as Mitsuba's bindings take them
     (the other variants: tests/test_variants.py).
+11. frozen evaluation (``dr.freeze``) of every compensated configuration: the
+    tables a plugin reads are part of what Dr.Jit traverses.
 
 A model's own module keeps only its independent transcription of the lecture
 and what is particular to it.
@@ -31,6 +33,7 @@ tests/bsdfs/test_registry.py checks that).
 """
 from __future__ import annotations
 
+import gc
 import math
 
 import numpy as np
@@ -44,7 +47,7 @@ from mi_brdfs.bsdfs.base import ParameterError
 from mi_brdfs.tools import catalog
 from mi_brdfs.tools.catalog import ENTRIES
 from support import (CHI2_ALPHA, BrokenEntry, albedo, assert_refused, chi2_test, chi2_test_count,
-                     config_id, direct_call_failures, evaluate, error_line, finite,
+                     config_id, direct_call_failures, eval_and_pdf, error_line, finite,
                      finite_difference, floats, points, f32, mirror_pairs,
                      property_form_failures, random_hemisphere, surface, vec)
 
@@ -122,7 +125,7 @@ def test_load_eval_pdf_sample(config, rng):
     assert type(bsdf).__name__ in str(bsdf) and f"mode={config['mode']}" in str(bsdf)
     n = 4096
     wi, wo = random_hemisphere(rng, n), random_hemisphere(rng, n)
-    value, pdf = evaluate(bsdf, wi, wo)
+    value, pdf = eval_and_pdf(bsdf, wi, wo)
     assert finite(value) and finite(pdf) and (value >= 0).all() and (pdf >= 0).all()
     assert (value.max(axis=1) > 0).mean() > 0.5 and (pdf > 0).mean() > 0.5
     bs, weight = bsdf.sample(mi.BSDFContext(), surface(wi), floats(rng.random(n)),
@@ -218,8 +221,8 @@ def test_reciprocity(config, rng):
     """hdr: eval(w_i, w_o)/cos θ_o = eval(w_o, w_i)/cos θ_i (the BRDF is symmetric)."""
     wi, wo = mirror_pairs(rng, 4096, ENTRIES[config["type"]].lobe_width, min_cos=0.01)
     bsdf = mi.load_dict(config)
-    forward = evaluate(bsdf, wi, wo)[0] / wo[:, 2:3]
-    backward = evaluate(bsdf, wo, wi)[0] / wi[:, 2:3]
+    forward = eval_and_pdf(bsdf, wi, wo)[0] / wo[:, 2:3]
+    backward = eval_and_pdf(bsdf, wo, wi)[0] / wi[:, 2:3]
     rtol = 1e-3 if config.get("energy_compensation") else 1e-4
     np.testing.assert_allclose(forward, backward, rtol=rtol, atol=1e-6 * forward.max())
     assert forward.max() > 0.1
@@ -373,7 +376,7 @@ def test_gradient_matches_finite_differences(config, p, where, x, rng):
     h = 1e-3 * max(1.0, abs(x))
     side = {"at 0": "forward", "at lo": "forward", "at hi": "backward"}.get(where, "central")
     fd = finite_difference(
-        lambda v: float(evaluate(mi.load_dict({**config, p.name: v}), wi, wo)[0].sum()),
+        lambda v: float(eval_and_pdf(mi.load_dict({**config, p.name: v}), wi, wo)[0].sum()),
         x, h, side)
     assert abs(fd) > 1e-3, f"the loss does not depend on {p.name} here (fd = {fd})"
     np.testing.assert_allclose(grad, fd, rtol=2e-2)
@@ -468,7 +471,7 @@ def edge_cases():
 def test_edge_values_are_accepted(config, rng):
     bsdf = mi.load_dict(config)
     wi, wo = random_hemisphere(rng, 256), random_hemisphere(rng, 256)
-    value, pdf = evaluate(bsdf, wi, wo)
+    value, pdf = eval_and_pdf(bsdf, wi, wo)
     assert finite(value) and finite(pdf) and (value >= 0).all() and (pdf >= 0).all()
 
 
@@ -513,7 +516,7 @@ def test_update_matches_a_fresh_load(config, rng):
     params.update()
     assert changed
     fresh = mi.load_dict({**config, **changed})
-    for a, b in zip(evaluate(bsdf, wi, wo), evaluate(fresh, wi, wo)):
+    for a, b in zip(eval_and_pdf(bsdf, wi, wo), eval_and_pdf(fresh, wi, wo)):
         np.testing.assert_allclose(a, b, rtol=1e-5, atol=1e-7)
 
 
@@ -562,6 +565,31 @@ def test_a_lobe_is_dropped_only_when_it_cannot_matter(name):
                 f"{where} as a texture: lobe dropped"
 
 
+@pytest.mark.parametrize("name", [n for n, c in PLUGINS.items()
+                                  if any(p.kind == "float" for p in c.PARAMS)])
+def test_a_number_folded_at_0_or_1_unfolds_when_it_changes(name, rng):
+    """A plain number at 0 or 1 (k = 0, f0 = 1, ...) is traced as that number
+    (BRDF.switch); changed through update(), the BSDF equals a fresh load with
+    the new value, and what its calls trace changes with it (trace_key: a
+    frozen render records again instead of replaying the folded number)."""
+    wi, wo = mirror_pairs(rng, 1024, ENTRIES[name].lobe_width, min_cos=0.05)
+    cases = [(p, v) for p in PLUGINS[name].PARAMS if p.kind == "float" for v in (0.0, 1.0)
+             if (p.lo is None or p.lo <= v) and (p.hi is None or v <= p.hi)]
+    assert cases
+    for p, value in cases:
+        bsdf = mi.load_dict({"type": name, p.name: value})
+        folded = bsdf.trace_key()
+        other = 0.37 if value == 0.0 else 0.63
+        params = mi.traverse(bsdf)
+        params[traverse_key(p)] = other
+        params.update()
+        assert bsdf.trace_key() != folded, f"{name}.{p.name} = {value}"
+        fresh = mi.load_dict({"type": name, p.name: other})
+        for a, b in zip(eval_and_pdf(bsdf, wi, wo), eval_and_pdf(fresh, wi, wo)):
+            np.testing.assert_allclose(a, b, rtol=1e-5, atol=1e-7,
+                                       err_msg=f"{name}.{p.name}: {value} -> {other}")
+
+
 # ----------------------------------------------------------------------------
 #  10. Every property form, every direct call
 # ----------------------------------------------------------------------------
@@ -584,3 +612,48 @@ def test_direct_calls_as_mitsuba_takes_them(name):
     failures = direct_call_failures({"type": name})
     assert not failures, "\n".join(failures)
 
+
+# ----------------------------------------------------------------------------
+#  11. Frozen evaluation
+# ----------------------------------------------------------------------------
+
+def compensated(name, e) -> list:
+    seen = []
+    for c in e.consistency + e.extremes:
+        if c.get("energy_compensation") and c not in seen:
+            seen.append(c)
+    return [pytest.param(c, id=config_id(c)) for c in seen]
+
+
+FROZEN = from_entries(compensated)
+
+
+def interaction(wi) -> mi.SurfaceInteraction3f:
+    si = dr.zeros(mi.SurfaceInteraction3f)
+    si.wi = wi
+    si.uv = mi.Point2f(0.5, 0.5)
+    return si
+
+
+@dr.freeze(state_fn=lambda bsdf, wi, wo: str(bsdf))
+def frozen_eval_pdf(bsdf, wi, wo):
+    """One frozen function for every case (a frozen function freed while
+    another records aborts); the plugin's description, with its options, is
+    part of the key (its Python-side choices are not traversed)."""
+    return bsdf.eval_pdf(mi.BSDFContext(), interaction(wi), wo)
+
+
+@pytest.mark.parametrize("config", FROZEN)
+def test_frozen_eval_matches_the_plain_call(config, rng):
+    """eval_pdf inside dr.freeze (recorded at the first call, replayed at the
+    second with other directions) equals the plain call: arrays made before
+    the recording (the compensation tables) reach the frozen function through
+    the plugin's traversal, as its inputs."""
+    gc.collect()                  # the earlier tests' objects, not during a recording
+    bsdf = mi.load_dict(config)
+    for _ in range(2):
+        wi, wo = vec(random_hemisphere(rng, 512)), vec(random_hemisphere(rng, 512))
+        value, pdf = frozen_eval_pdf(bsdf, wi, wo)
+        expected, expected_pdf = bsdf.eval_pdf(mi.BSDFContext(), interaction(wi), wo)
+        np.testing.assert_allclose(np.array(value), np.array(expected), rtol=1e-5, atol=1e-7)
+        np.testing.assert_allclose(np.array(pdf), np.array(expected_pdf), rtol=1e-5, atol=1e-7)

@@ -14,7 +14,7 @@ import pytest
 
 import mitsuba as mi
 
-from support import evaluate, f32, mirror_pairs, mirror_lobe_albedo, random_hemisphere
+from support import eval_and_pdf, f32, mirror_pairs, mirror_lobe_albedo, random_hemisphere
 
 
 def blinn(**params):
@@ -73,10 +73,10 @@ def test_exponent_zero_is_lambert(rng):
     """gamma = 0: N = 1/pi and n·h > 0 always, so the hdr model is Lambert with
     m_D + m_S (and the scanline lobe the constant m_S)."""
     d, w = f32(random_hemisphere(rng, 4096)), f32(random_hemisphere(rng, 4096))
-    value, pdf = evaluate(blinn(diffuse_reflectance=0.2, specular_reflectance=0.7, exponent=0.0), w, d)
-    lambert, _ = evaluate(mi.load_dict({"type": "lambert", "reflectance": 0.9}), w, d)
+    value, pdf = eval_and_pdf(blinn(diffuse_reflectance=0.2, specular_reflectance=0.7, exponent=0.0), w, d)
+    lambert, _ = eval_and_pdf(mi.load_dict({"type": "lambert", "reflectance": 0.9}), w, d)
     np.testing.assert_allclose(value, lambert, rtol=1e-6)
-    value, _ = evaluate(blinn(mode="scanline", diffuse_reflectance=0.0,
+    value, _ = eval_and_pdf(blinn(mode="scanline", diffuse_reflectance=0.0,
                              specular_reflectance=0.7, exponent=0.0), w, d)
     np.testing.assert_array_equal(value[:, 0], np.float32(0.7))
 

@@ -6,7 +6,7 @@ import pytest
 import drjit as dr
 import mitsuba as mi
 
-from support import (albedo, evaluate, floats, load_form, points, property_forms,
+from support import (albedo, eval_and_pdf, floats, load_form, points, property_forms,
                      random_hemisphere, rgb, surface)
 
 
@@ -22,8 +22,8 @@ def test_hdr_equals_mitsuba_diffuse(rng, tmp_path, form):
     wi[n // 4: n // 2, 2] *= -1    # and viewers below it
     element = property_forms(tmp_path)[form]
     ours, ref = (load_form(plugin, "reflectance", element) for plugin in ("lambert", "diffuse"))
-    v, p = evaluate(ours, wi, wo)
-    v_ref, p_ref = evaluate(ref, wi, wo)
+    v, p = eval_and_pdf(ours, wi, wo)
+    v_ref, p_ref = eval_and_pdf(ref, wi, wo)
     np.testing.assert_allclose(v, v_ref, rtol=1e-5, atol=1e-7)
     np.testing.assert_allclose(p, p_ref, rtol=1e-5, atol=1e-7)
     assert np.count_nonzero(v[:, 0]) > n // 3     # not a trivial all-zero agreement
@@ -45,7 +45,7 @@ def test_scanline_is_lecture_formula(rng):
     wo[: n // 4, 2] *= -1
     bsdf = mi.load_dict({"type": "lambert", "mode": "scanline",
                          "reflectance": {"type": "rgb", "value": m_d.tolist()}})
-    v, _ = evaluate(bsdf, wi, wo)
+    v, _ = eval_and_pdf(bsdf, wi, wo)
     expected = np.clip(m_d[None, :] * np.maximum(wo[:, 2:3], 0.0), 0.0, 1.0)
     np.testing.assert_allclose(v, expected, rtol=1e-6, atol=1e-7)
     assert (v[:, 0] == 1.0).any() and (v[:, 0] < 1.0).any()   # the clamp is exercised

@@ -13,7 +13,7 @@ import pytest
 import drjit as dr
 import mitsuba as mi
 
-from support import assert_refused, evaluate, f32, random_hemisphere, rgb, surface, vec
+from support import assert_refused, eval_and_pdf, f32, random_hemisphere, rgb, surface, vec
 
 
 HALF_PI = 0.5 * math.pi
@@ -68,7 +68,7 @@ def test_scanline_matches_lecture(rng, sigma):
     d, w = f32(random_hemisphere(rng, n, 0.01)), f32(random_hemisphere(rng, n, 0.01))
     m_d = np.array([2.6, 1.1, 0.3])          # above 1: the clamp is exercised
     bsdf = load(mode="scanline", sigma=sigma, reflectance=rgb(m_d))
-    v, _ = evaluate(bsdf, wi=w, wo=d)
+    v, _ = eval_and_pdf(bsdf, wi=w, wo=d)
     raw = lecture_oren_nayar(d, w, m_d, sigma)
     np.testing.assert_allclose(v, np.clip(raw, 0, 1), rtol=2e-4, atol=1e-6)
     assert (raw[:, 0] > 1).any() and ((raw[:, 0] > 0.05) & (raw[:, 0] < 1)).any()
@@ -79,7 +79,7 @@ def test_hdr_matches_normalised_formula(rng, sigma):
     n = 4096
     d, w = f32(random_hemisphere(rng, n, 0.01)), f32(random_hemisphere(rng, n, 0.01))
     m_d = np.array([2.6, 1.1, 0.3])          # hdr: no clamp
-    v, _ = evaluate(load(sigma=sigma, reflectance=rgb(m_d)), wi=w, wo=d)
+    v, _ = eval_and_pdf(load(sigma=sigma, reflectance=rgb(m_d)), wi=w, wo=d)
     expected = hdr_reference(d, w, m_d, sigma)
     np.testing.assert_allclose(v, expected, rtol=2e-4, atol=1e-6)
     assert v.max() > 1.0 / np.pi              # unclamped values above the scanline's 1/π·...
@@ -107,7 +107,7 @@ def test_below_surface_is_black(rng):
     for mode, method in itertools.product(["scanline", "hdr"], METHODS):
         bsdf = load(mode=mode, method=method, sigma=1.0)
         for wi, wo in [(w, d * [1, 1, -1]), (w * [1, 1, -1], d)]:
-            v, p = evaluate(bsdf, wi, wo)
+            v, p = eval_and_pdf(bsdf, wi, wo)
             assert not v.any() and not p.any()
 
 
@@ -125,8 +125,8 @@ def test_sigma_zero_equals_mitsuba_diffuse(rng, method, reflectance):
     value = rgb(reflectance) if isinstance(reflectance, list) else reflectance
     ours = load(sigma=0.0, method=method, reflectance=value)
     ref = mi.load_dict({"type": "diffuse", "reflectance": value})
-    v, p = evaluate(ours, wi, wo)
-    v_ref, p_ref = evaluate(ref, wi, wo)
+    v, p = eval_and_pdf(ours, wi, wo)
+    v_ref, p_ref = eval_and_pdf(ref, wi, wo)
     np.testing.assert_allclose(v, v_ref, rtol=1e-6, atol=0)
     np.testing.assert_allclose(p, p_ref, rtol=1e-6, atol=0)
     assert np.count_nonzero(v[:, 0]) > n // 3
@@ -145,7 +145,7 @@ def test_direction_along_normal(method):
     t = np.array([[0.6, 0.0, 0.8]])
     wi = np.concatenate([n, n, t])
     wo = np.concatenate([n, t, n])
-    v, _ = evaluate(load(sigma=sigma, method=method, reflectance=m_d), wi, wo)
+    v, _ = eval_and_pdf(load(sigma=sigma, method=method, reflectance=m_d), wi, wo)
     np.testing.assert_allclose(v[:, 0], m_d * A / np.pi * wo[:, 2], rtol=1e-5)
 
 
@@ -161,7 +161,7 @@ def test_grazing_is_bounded(method, mode):
     dirs = [np.array([math.sqrt(1 - c * c), 0.0, c]) for c in cosines]
     wi = np.array([a for a, b in itertools.product(dirs, dirs)])
     wo = np.array([b for a, b in itertools.product(dirs, dirs)])
-    v, p = evaluate(load(sigma=sigma, method=method, mode=mode, reflectance=1.0), wi, wo)
+    v, p = eval_and_pdf(load(sigma=sigma, method=method, mode=mode, reflectance=1.0), wi, wo)
     assert np.isfinite(v).all() and np.isfinite(p).all()
     bound = (A + B) / (1.0 if mode == "scanline" else np.pi)
     assert v.max() <= bound * (1 + 1e-5)
@@ -180,8 +180,8 @@ def table_errors(res, d, w):
     """Errors of the table's hdr eval (m_D = 1, σ = π/2, the largest B) against
     the exact one on the same direction pairs: max, RMS, max with both cosines
     >= 0.1, and the maximum relative error there."""
-    exact = evaluate(load(sigma=HALF_PI), w, d)[0][:, 0]
-    table = evaluate(load(sigma=HALF_PI, method="table", table_resolution=res), w, d)[0][:, 0]
+    exact = eval_and_pdf(load(sigma=HALF_PI), w, d)[0][:, 0]
+    table = eval_and_pdf(load(sigma=HALF_PI, method="table", table_resolution=res), w, d)[0][:, 0]
     err = np.abs(table - exact)
     away = (d[:, 2] >= 0.1) & (w[:, 2] >= 0.1)
     return (err.max(), np.sqrt(np.mean(err**2)), err[away].max(),
@@ -357,7 +357,7 @@ def eon_eval(d, w, rho, sigma):
 def test_eon_matches_the_paper(rng, sigma):
     d, w = f32(random_hemisphere(rng, 4096, 0.01)), f32(random_hemisphere(rng, 4096, 0.01))
     rho = np.array([0.9, 0.5, 0.2])
-    v, _ = evaluate(load(sigma=sigma, reflectance=rgb(rho), energy_compensation=True), w, d)
+    v, _ = eval_and_pdf(load(sigma=sigma, reflectance=rgb(rho), energy_compensation=True), w, d)
     np.testing.assert_allclose(v, eon_eval(d, w, rho, sigma), rtol=2e-4, atol=1e-7)
 
 
@@ -386,6 +386,6 @@ def test_eon_roughness_follows_the_lecture_sigma():
     assert eon_r(HALF_PI) == pytest.approx(0.776, abs=1e-3)
     rng = np.random.default_rng(3)
     d, w = random_hemisphere(rng, 512, 0.01), random_hemisphere(rng, 512, 0.01)
-    lam, _ = evaluate(mi.load_dict({"type": "lambert", "reflectance": 0.7}), w, d)
-    eon, _ = evaluate(load(sigma=0.0, reflectance=0.7, energy_compensation=True), w, d)
+    lam, _ = eval_and_pdf(mi.load_dict({"type": "lambert", "reflectance": 0.7}), w, d)
+    eon, _ = eval_and_pdf(load(sigma=0.0, reflectance=0.7, energy_compensation=True), w, d)
     np.testing.assert_allclose(eon, lam, rtol=1e-5)

@@ -13,7 +13,7 @@ import numpy as np
 
 import mitsuba as mi
 
-from support import evaluate, f32, mirror_pairs, random_hemisphere, unit
+from support import eval_and_pdf, f32, mirror_pairs, random_hemisphere, unit
 
 
 def phong(**params):
@@ -67,7 +67,7 @@ lobe_cosine = cos_alpha          # the cosine the lobe raises to gamma
 def test_exponent_zero_is_the_hemisphere_about_the_mirror_direction(rng):
     """gamma = 0: clamp(w·r)^0 is 1 where w·r > 0 and 0 beyond 90 deg (0^0 := 0)."""
     d, w = f32(random_hemisphere(rng, 4096)), f32(random_hemisphere(rng, 4096))
-    value, _ = evaluate(phong(mode="scanline", diffuse_reflectance=0.0,
+    value, _ = eval_and_pdf(phong(mode="scanline", diffuse_reflectance=0.0,
                               specular_reflectance=0.7, exponent=0.0), w, d)
     np.testing.assert_array_equal(value[:, 0], np.where(cos_alpha(d, w) > 0, np.float32(0.7), 0.0))
     assert (cos_alpha(d, w) < 0).sum() > 500

@@ -22,7 +22,7 @@ import mitsuba as mi
 
 import test_blinn
 import test_phong
-from support import (evaluate, mirror_lobe_albedo, rgb, sample_narrow_lobe, surface,
+from support import (eval_and_pdf, mirror_lobe_albedo, rgb, sample_narrow_lobe, surface,
                      uniform_hemisphere_grid)
 
 MODULES = {"phong": test_phong, "blinn": test_blinn}
@@ -56,7 +56,7 @@ def test_scanline_matches_lecture(model, rng, gamma):
     d, w = lecture_pairs(module, rng, gamma)
     bsdf = load(model, mode="scanline", diffuse_reflectance=rgb(M_D),
                 specular_reflectance=rgb(M_S), exponent=gamma)
-    value, _ = evaluate(bsdf, wi=w, wo=d)
+    value, _ = eval_and_pdf(bsdf, wi=w, wo=d)
     np.testing.assert_allclose(value, module.lecture_scanline(d, w, M_D, M_S, gamma),
                                rtol=2e-5, atol=1e-6)
     spec = M_S[None, :] * np.clip(module.lobe_cosine(d, w), 0, 1)[:, None] ** gamma
@@ -72,7 +72,7 @@ def test_hdr_matches_normalised_formula(model, rng, gamma):
     d, w = lecture_pairs(module, rng, gamma)
     bsdf = load(model, diffuse_reflectance=rgb(M_D), specular_reflectance=rgb(M_S),
                 exponent=gamma)
-    value, _ = evaluate(bsdf, wi=w, wo=d)
+    value, _ = eval_and_pdf(bsdf, wi=w, wo=d)
     expected = module.normalised_hdr(d, w, M_D, M_S, gamma)
     np.testing.assert_allclose(value, expected, rtol=2e-5, atol=1e-6 * expected.max())
     assert gamma < 5 or (value > 1).any()       # unclamped
@@ -142,7 +142,7 @@ def test_furnace_uniform_hemisphere_estimate_agrees(model):
         for i, th in enumerate(THETAS):
             wi = np.tile(np.array([np.sin(np.radians(th)), 0.0, np.cos(np.radians(th))]),
                          (len(wo), 1))
-            e = 2 * np.pi * evaluate(bsdf, wi, wo)[0][:, 0].mean()
+            e = 2 * np.pi * eval_and_pdf(bsdf, wi, wo)[0][:, 0].mean()
             assert e == pytest.approx(table[0.3, 0.7, gamma][i], abs=2.5e-4), (gamma, th)
 
 
@@ -154,13 +154,13 @@ def test_exponent_texture(model, rng):
     tex = {"type": "checkerboard", "color0": 20.0, "color1": 300.0}
     d, w = MODULES[model].pairs(rng, 2048, 20.0)
     uv = rng.random((len(d), 2))
-    value, pdf = evaluate(load(model, exponent=tex), w, d, uv=uv)
+    value, pdf = eval_and_pdf(load(model, exponent=tex), w, d, uv=uv)
     si = surface(w, uv)
     gammas = np.array(mi.load_dict(tex).eval_1(si))
     for gamma in (20.0, 300.0):
         cells = gammas == gamma
         assert cells.sum() > 500
-        v_ref, p_ref = evaluate(load(model, exponent=gamma), w[cells], d[cells])
+        v_ref, p_ref = eval_and_pdf(load(model, exponent=gamma), w[cells], d[cells])
         np.testing.assert_allclose(value[cells], v_ref, rtol=1e-6)
         np.testing.assert_allclose(pdf[cells], p_ref, rtol=1e-6)
 
@@ -193,7 +193,7 @@ def test_high_exponent_lobe_is_exact(model, gamma, theta):
     pdf_ref, eval_ref = module.lobe_reference(wi, wo, gamma)
     rtol = 1e-5                       # measured: at most 2.5e-6 at every gamma
     np.testing.assert_allclose(pdf, pdf_ref, rtol=rtol)
-    np.testing.assert_allclose(evaluate(bsdf, wi, wo)[0][:, 0], eval_ref, rtol=rtol)
+    np.testing.assert_allclose(eval_and_pdf(bsdf, wi, wo)[0][:, 0], eval_ref, rtol=rtol)
 
 
 @MODELS

@@ -9,7 +9,7 @@ import pytest
 
 import mitsuba as mi
 
-from support import assert_refused, albedo, evaluate, f32, random_hemisphere, rgb
+from support import assert_refused, albedo, eval_and_pdf, f32, random_hemisphere, rgb
 
 
 MODELS = ["phong", "blinn"]
@@ -148,7 +148,7 @@ def test_matches_lecture(rng, mode, p):
     n = 8192
     d, w = direction_pairs(rng, n)
     keep = away_from_steps(d, w, p)
-    v, _ = evaluate(load(mode=mode, **plugin_dict(p)), wi=w[keep], wo=d[keep])
+    v, _ = eval_and_pdf(load(mode=mode, **plugin_dict(p)), wi=w[keep], wo=d[keep])
     expected = reference(d[keep], w[keep], p, mode)
     np.testing.assert_allclose(v, expected, rtol=1e-5, atol=1e-5)
     f_d, f_s = lecture_toon(d[keep], w[keep], p)
@@ -183,7 +183,7 @@ def test_ramps(rng, mode, filter_type):
         for cos, texels in ((dn, 5), (c, 8)):
             u = (cos + 1) / 2 * texels
             keep &= np.abs(u - np.round(u)) > 1e-4
-    v, _ = evaluate(load(mode=mode, **plugin_dict(p)), wi=w[keep], wo=d[keep])
+    v, _ = eval_and_pdf(load(mode=mode, **plugin_dict(p)), wi=w[keep], wo=d[keep])
     np.testing.assert_allclose(v, reference(d[keep], w[keep], p, mode), rtol=1e-5, atol=1e-5)
     assert len(np.unique(np.round(v[:, 0], 4))) >= (5 if filter_type == "nearest" else 100)
 
@@ -195,16 +195,16 @@ def test_thresholds_exactly_hit():
     wo = np.array([[math.sqrt(0.75), 0.0, 0.5], [0.0, math.sqrt(1 - 0.75**2), 0.75]])
     base = {"diffuse_reflectance": 0.9, "diffuse_shade": 0.1, "diffuse_threshold": 0.5,
             "specular_reflectance": 0.6, "specular_shade": 0.2, "specular_threshold": 0.75}
-    v, p = evaluate(load(**base, mode="scanline"), wi, wo)
+    v, p = eval_and_pdf(load(**base, mode="scanline"), wi, wo)
     assert np.isfinite(v).all() and np.isfinite(p).all()
     # d·n = 0.5 = t_D: m_D1; ω_r·r = 0.5 < t_S: m_S2
     np.testing.assert_allclose(v[0], 0.9 + 0.2, rtol=1e-6)
     # d·n = 0.75 >= t_D: m_D1; ω_r·r = 0.75 = t_S: m_S1
     np.testing.assert_allclose(v[1], 0.9 + 0.6, rtol=1e-6)
-    v, _ = evaluate(load(**base, smoothness=0.2, mode="scanline"), wi, wo)
+    v, _ = eval_and_pdf(load(**base, smoothness=0.2, mode="scanline"), wi, wo)
     np.testing.assert_allclose(v[0], 0.5 + 0.2, rtol=1e-6)   # diffuse band midpoint
     np.testing.assert_allclose(v[1], 0.9 + 0.4, rtol=1e-6)   # specular band midpoint
-    v_hdr, _ = evaluate(load(**base, smoothness=0.2), wi, wo)  # hdr: the same over 2π
+    v_hdr, _ = eval_and_pdf(load(**base, smoothness=0.2), wi, wo)  # hdr: the same over 2π
     np.testing.assert_allclose(v_hdr, v / (2 * np.pi), rtol=1e-6)
 
 
@@ -219,13 +219,13 @@ def test_lights_behind_see_the_dark_side_viewers_below_see_nothing(rng, mode):
     w, d = random_hemisphere(rng, 1024, 0.01), random_hemisphere(rng, 1024, 0.01)
     bsdf = load(mode=mode, diffuse_shade=rgb([0.3, 0.2, 0.1]), specular_shade=0.5,
                 specular_threshold=-1.0)                     # highlight everywhere above
-    v, p = evaluate(bsdf, wi=w, wo=d * [1, 1, -1])           # lights behind
+    v, p = eval_and_pdf(bsdf, wi=w, wo=d * [1, 1, -1])           # lights behind
     dark = [0.3, 0.2, 0.1] if mode == "scanline" else [0.0, 0.0, 0.0]
     np.testing.assert_allclose(v, np.broadcast_to(dark, v.shape), rtol=1e-6)
     assert not p.any()                                        # never sampled there
-    v, p = evaluate(bsdf, wi=w * [1, 1, -1], wo=d)            # viewers below
+    v, p = eval_and_pdf(bsdf, wi=w * [1, 1, -1], wo=d)            # viewers below
     assert not v.any() and not p.any()
-    v, _ = evaluate(bsdf, wi=w * [1, 1, -1], wo=d * [1, 1, -1])
+    v, _ = eval_and_pdf(bsdf, wi=w * [1, 1, -1], wo=d * [1, 1, -1])
     assert not v.any()
 
 

@@ -10,7 +10,7 @@ import pytest
 import drjit as dr
 import mitsuba as mi
 
-from support import assert_refused, evaluate, random_hemisphere, rgb
+from support import assert_refused, eval_and_pdf, random_hemisphere, rgb
 
 
 # ----------------------------------------------------------------------------
@@ -90,7 +90,7 @@ def load(mode="hdr", alpha_t=0.1, alpha_b=0.1, formula="vectors", m_d=M_D, m_s=M
 @pytest.mark.parametrize("alpha_t, alpha_b", ALPHAS)
 def test_scanline_matches_lecture(rng, formula, alpha_t, alpha_b):
     d, w = pairs(rng, 4096, alpha_t, alpha_b)
-    v, _ = evaluate(load("scanline", alpha_t, alpha_b, formula), wi=w, wo=d)
+    v, _ = eval_and_pdf(load("scanline", alpha_t, alpha_b, formula), wi=w, wo=d)
     np.testing.assert_allclose(v, ward_scanline(d, w, M_D, M_S, alpha_t, alpha_b),
                                rtol=2e-4, atol=1e-6)
     # Both clamps are exercised (values above 1 exist), and so is the unclamped range.
@@ -103,7 +103,7 @@ def test_scanline_matches_lecture(rng, formula, alpha_t, alpha_b):
 @pytest.mark.parametrize("alpha_t, alpha_b", ALPHAS)
 def test_hdr_matches_normalised_formula(rng, formula, alpha_t, alpha_b):
     d, w = pairs(rng, 4096, alpha_t, alpha_b)
-    v, _ = evaluate(load("hdr", alpha_t, alpha_b, formula), wi=w, wo=d)
+    v, _ = eval_and_pdf(load("hdr", alpha_t, alpha_b, formula), wi=w, wo=d)
     np.testing.assert_allclose(v, ward_hdr(d, w, M_D, M_S, alpha_t, alpha_b),
                                rtol=2e-4, atol=1e-6)
     assert v.max() > 5.0        # unclamped
@@ -134,8 +134,8 @@ def test_formulas_agree_to_float32(rng):
     w2 = random_hemisphere(rng, tilts.size, 0.2)
     d2 = 2 * _dot(w2, h)[:, None] * h - w2
     d, w = np.vstack([d, d2, w2]), np.vstack([w, w2, w2])          # w2 twice: wi = wo
-    v_vec, _ = evaluate(load("hdr", alpha_t, alpha_b, "vectors", m_d=[0, 0, 0], m_s=[1, 1, 1]), w, d)
-    v_ang, _ = evaluate(load("hdr", alpha_t, alpha_b, "angles", m_d=[0, 0, 0], m_s=[1, 1, 1]), w, d)
+    v_vec, _ = eval_and_pdf(load("hdr", alpha_t, alpha_b, "vectors", m_d=[0, 0, 0], m_s=[1, 1, 1]), w, d)
+    v_ang, _ = eval_and_pdf(load("hdr", alpha_t, alpha_b, "angles", m_d=[0, 0, 0], m_s=[1, 1, 1]), w, d)
     hh = _half(d, w)
     x = ((hh[:, 0] / alpha_t) ** 2 + (hh[:, 1] / alpha_b) ** 2) / hh[:, 2] ** 2
     tan_delta = np.hypot(hh[:, 0], hh[:, 1]) / hh[:, 2]
@@ -153,9 +153,9 @@ def test_alpha_u_acts_along_the_tangent_s():
     t = math.radians(20)
     wi = np.array([[0.0, 0.0, 1.0]] * 2)
     wo = np.array([[math.sin(t), 0, math.cos(t)], [0, math.sin(t), math.cos(t)]])  # along x, along y
-    v, _ = evaluate(load("hdr", 0.3, 0.05, m_d=[0, 0, 0]), wi, wo)
+    v, _ = eval_and_pdf(load("hdr", 0.3, 0.05, m_d=[0, 0, 0]), wi, wo)
     assert v[0, 1] > 1e3 * v[1, 1]
-    v, _ = evaluate(load("hdr", 0.05, 0.3, m_d=[0, 0, 0]), wi, wo)
+    v, _ = eval_and_pdf(load("hdr", 0.05, 0.3, m_d=[0, 0, 0]), wi, wo)
     assert v[1, 1] > 1e3 * v[0, 1]
 
 
@@ -164,7 +164,7 @@ def test_below_surface_is_black(rng):
     for formula in ("vectors", "angles"):
         bsdf = load("scanline", formula=formula)
         for wi, wo in [(w, d * [1, 1, -1]), (w * [1, 1, -1], d)]:
-            v, p = evaluate(bsdf, wi, wo)
+            v, p = eval_and_pdf(bsdf, wi, wo)
             assert not v.any() and not p.any()
 
 

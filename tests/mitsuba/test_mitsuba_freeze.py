@@ -20,8 +20,8 @@ What changed, and why (each change is also commented at its test):
   ``mask`` and ``twosided`` hold ``lambert``. ``blendbsdf``'s ``conductor``
   stays (no counterpart). Added: ``cook_torrance`` with
   ``energy_compensation`` (tabulated albedos, the one kind of plugin state
-  that is not a scene parameter); evaluating it inside a frozen function is
-  a known failure, marked ``xfail(strict=True)`` at :data:`FROZEN_TABLES`. The entries without a plugin (dielectrics,
+  that is not a scene parameter: the plugin holds them as Dr.Jit members,
+  so a frozen function sees them as inputs). The entries without a plugin (dielectrics,
   conductor, hair, plastic, principled, the custom Python BSDF) test
   Mitsuba itself and are not ported.
 - Textures: upstream reads ``wood.jpg``, ``leaf_mask.png``,
@@ -217,15 +217,6 @@ def bsdf_dict(bsdf: str) -> dict:
 
 BSDFS = ["lambert", "cook_torrance", "cook_torrance_compensated", "bumpmap", "normalmap",
          "blendbsdf", "mask", "twosided"]
-# Evaluating a table-compensated plugin inside dr.freeze fails at recording
-# (its albedo tables are not among the frozen function's inputs); frozen
-# renders of it work (test04). The energy-compensation work fixes it: this
-# mark must then go (strict: a pass fails the suite until it does).
-FROZEN_TABLES = pytest.mark.xfail(
-    strict=True, raises=RuntimeError,
-    reason="compensation tables are invisible to dr.freeze (fixed on the energy-compensation branch)")
-BSDFS_EVAL = [pytest.param(b, marks=FROZEN_TABLES) if b == "cook_torrance_compensated" else b
-              for b in BSDFS]
 
 
 @pytest.mark.parametrize("bsdf", BSDFS)
@@ -241,7 +232,7 @@ def test04_bsdf(variants_vec_rgb, bsdf, auto_opaque):
     assert_render(scene, 5, auto_opaque=auto_opaque)
 
 
-@pytest.mark.parametrize("bsdf", BSDFS_EVAL)
+@pytest.mark.parametrize("bsdf", BSDFS)
 @pytest.mark.parametrize("auto_opaque", AUTO_OPAQUE)
 def test05_bsdf_eval(variants_vec_rgb, bsdf, auto_opaque):
     n = 5

@@ -96,6 +96,25 @@ def test_a_replay_takes_the_seed_and_the_scene_values_of_its_call():
     assert both(8, [0.2, 0.4, 1.5])[1] == recordings <= 2
 
 
+def test_a_folded_number_changed_records_again():
+    """f0 = 1 and k = 0 are traced as numbers (no Fresnel, no lobe weight): a
+    new f0 records again (the plugin's trace_key is part of the key) instead of
+    replaying F = 1, and equals the plain render."""
+    d = sphere_scene({"type": "cook_torrance", "k": 0.0, "f0": 1.0, "alpha": 0.3,
+                      "distribution": "ggx", "geometry": "smith"}, RES, PATH, env=0.5)
+    scene = mi.load_dict(d, parallel=False)
+    render = frozen.FrozenRender()
+    frozen.warm_up(scene)
+    params = mi.traverse(scene)
+    first = np.array(render(scene, 2, 0))
+    params["sphere.bsdf.f0"] = 0.25
+    params.update()
+    second = np.array(render(scene, 2, 0))
+    np.testing.assert_allclose(second, np.array(mi.render(scene, spp=2, seed=0)),
+                               rtol=1e-6, atol=1e-7)
+    assert render.recordings == 2 and second.mean() < 0.9 * first.mean()
+
+
 @pytest.mark.parametrize("key, value, retraced", [("sphere.bsdf.k", 0.0, True),
                                                   ("light.intensity.value", 30.0, False)])
 def test_a_change_between_passes(key, value, retraced):

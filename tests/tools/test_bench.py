@@ -122,7 +122,9 @@ def test_materials_each_kind_and_count_in_its_own_process(results):
     assert {(row["name"], row["materials"]) for row in rows} == {
         (f"{p} vs {b}", n) for p, b in catalog.BENCH_MATERIAL_PAIRS for n in bench.QUICK.materials}
     for row in rows:
-        for side in ("plugin", "builtin"):
+        assert row["floor"] == catalog.BENCH_FLOORS[row["name"].split(" vs ")[0]]
+        assert row["warm_vs_floor"] > 0 and row["floor_warm_ratio"] > 0
+        for side in ("plugin", "builtin", "floor"):
             assert row[f"{side}_peak_mib"] > 10                     # measured by the child
             assert row[f"{side}_first_s"] >= row[f"{side}_first_codegen_s"] > 0
             assert row[f"{side}_execution_s"] > 0
@@ -160,6 +162,13 @@ def test_kernels_and_tracing_every_pair_and_method(results):
     assert sample["render_calls"] >= 1
     assert tracing[(ggx, "eval_pdf")]["render_calls"] >= 1
     assert sample["inner_calls"] == "" and sample["texture_evals"] == 2
+    # The floor (a bare Python BSDF) beside the pairs that have one, and the
+    # Dr.Jit variables every call creates, plugin and built-in alike.
+    for (name, method), row in tracing.items():
+        assert ("floor_ms" in row) == (name in catalog.BENCH_TRACING_FLOORS)
+        assert row["plugin_vars"] > 0 and row["builtin_vars"] > 0
+        if "floor_ms" in row:
+            assert row["floor_ms"] > 0 and row["floor_vars"] > 0 and row["ms_vs_floor"] > 0
 
 
 def test_energy_compensation_costed_per_model(results):
@@ -179,6 +188,32 @@ def test_energy_compensation_costed_per_model(results):
         else:
             assert row["table"] == spec.name and row["table_build_s"] > 0
             assert row["table_nodes"] == np.prod([a.n for a in spec.axes])
+
+
+@pytest.mark.parametrize("floor, builtin", [
+    ({"type": "bench_floor_ggx", "alpha": 0.3},
+     {"type": "roughconductor", "distribution": "ggx", "alpha": 0.3}),
+    ({"type": "bench_floor_diffuse", "reflectance": 0.6}, {"type": "diffuse", "reflectance": 0.6})])
+def test_the_floor_is_the_builtins_bsdf(floor, builtin):
+    """The floor measured beside the plugins is the built-in's BSDF in bare
+    Python: the same eval and pdf, and samples whose weight is eval / pdf."""
+    import mitsuba as mi
+
+    from mi_brdfs.tools.bench import floor as floors
+    from mi_brdfs.tools.bench.measure import bsdf_inputs
+    floors.register()
+    x = bsdf_inputs(4096)
+    ours, ref = mi.load_dict(floor), mi.load_dict(builtin)
+    for a, b in zip(ours.eval_pdf(x["ctx"], x["si"], x["wo"]),
+                    ref.eval_pdf(x["ctx"], x["si"], x["wo"])):
+        np.testing.assert_allclose(np.array(a), np.array(b), rtol=1e-5, atol=1e-6)
+    bs, weight = ours.sample(x["ctx"], x["si"], x["sample1"], x["sample2"])
+    value, pdf = ours.eval_pdf(x["ctx"], x["si"], bs.wo)
+    ok = np.array(weight)[0] > 0
+    assert ok.mean() > 0.8
+    np.testing.assert_allclose(np.array(bs.pdf)[ok], np.array(pdf)[ok], rtol=1e-4)
+    np.testing.assert_allclose(np.array(weight)[:, ok] * np.array(pdf)[ok],
+                               np.array(value)[:, ok], rtol=1e-4, atol=1e-7)
 
 
 def test_peak_memory_is_the_workers_own():

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from mi_brdfs.bsdfs import BY_NAME
-from mi_brdfs.tools import catalog, cli, validate
+from mi_brdfs.tools import catalog, cli, groundtruth, validate
 
 
 @pytest.fixture(scope="module")
@@ -168,7 +168,7 @@ def test_summary_counts_every_check(report):
     out, r = report
     checks = r["checks"]
     n_rows = (len(r["equivalence"]) + len(r["fresnel"]) + 2 * len(r["furnace"])
-              + len(r["sampling"]) + len(r["negative"]))
+              + len(r["sampling"]) + len(r["negative"]) + len(r["groundtruth"]))
     assert len(checks) == n_rows and len({c["id"] for c in checks}) == n_rows
     assert r["summary"] == {s: sum(c["status"] == s for c in checks)
                             for s in ("fail", "known", "documented", "pass")}
@@ -207,6 +207,7 @@ def fake_sections(monkeypatch, chi2_passed: bool, furnace_max: float = 1.0):
     monkeypatch.setattr(validate, "fresnel_section", lambda: [])
     monkeypatch.setattr(validate, "furnace_section", lambda size, out, models: [row])
     monkeypatch.setattr(validate, "lobe_section", lambda out, models: [])
+    monkeypatch.setattr(groundtruth, "report_section", lambda out, quick=False, log=None: [])
     monkeypatch.setattr(validate, "negative_section", lambda size, negatives, count: [])
     monkeypatch.setattr(validate, "sampling_section", lambda size, models, count: [
         {"model": "phong", "config": "injected", "theta": 30, "passed": chi2_passed,

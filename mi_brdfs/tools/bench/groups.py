@@ -19,7 +19,8 @@ import numpy as np
 
 from .. import catalog
 from . import plots, report
-from .measure import FULL, Settings, References, efficiency, image, relmse, scene_dict, timed
+from .measure import (FULL, References, Settings, alternating, efficiency, image, relmse,
+                      scene_dict, timed)
 from .workers import in_subprocess
 
 
@@ -171,17 +172,19 @@ def lobes(s: Settings, refs: References) -> list[dict]:
 
 def energy(s: Settings, refs: References) -> list[dict]:
     """Energy compensation: render time of each compensated model with
-    energy_compensation on vs off (same scene and spp), and the time to build
-    its albedo table (as python -m mi_brdfs.tools.tables does)."""
+    energy_compensation on vs off (same scene and spp; on and off taking turns
+    in one process, medians; wall and kernel execution time), and the time to
+    build its albedo table (as python -m mi_brdfs.tools.tables does)."""
     import mitsuba as mi
 
     from ...bsdfs import energy as tables
     built: dict[str, float] = {}
     rows = []
     for name, config in catalog.BENCH_ENERGY:
-        t_off = timed(mi.load_dict(scene_dict(config, s.res)), s.spp, s.repeats)
-        t_on = timed(mi.load_dict(scene_dict({**config, "energy_compensation": True}, s.res)),
-                     s.spp, s.repeats)
+        t = alternating({"off": mi.load_dict(scene_dict(config, s.res)),
+                         "on": mi.load_dict(scene_dict({**config, "energy_compensation": True},
+                                                       s.res))}, s.spp, s.repeats)
+        t_off, t_on = t["off"], t["on"]
         spec = mi.load_dict(config).albedo_spec()
         if spec is not None and spec.name not in built:
             start = time.perf_counter()
@@ -189,6 +192,7 @@ def energy(s: Settings, refs: References) -> list[dict]:
             built[spec.name] = time.perf_counter() - start
         rows.append({"name": name, "off_s": t_off["median_s"], "on_s": t_on["median_s"],
                      "ratio": t_on["median_s"] / t_off["median_s"],
+                     "execution_ratio": t_on["execution_s"] / t_off["execution_s"],
                      "table": spec.name if spec else "(analytic)",
                      "table_nodes": int(np.prod([a.n for a in spec.axes])) if spec else 0,
                      "table_samples": s.table_samples if spec else 0,
@@ -209,32 +213,38 @@ MATERIALS_COLUMNS = {     # column: the worker's figure
 
 def materials(s: Settings, refs: References) -> list[dict]:
     """N spheres, each with its own material (path depth 3, constant
-    environment), plugin vs built-in (catalog.BENCH_MATERIAL_PAIRS): first and
-    warm render split into tracing, code generation and kernel execution, a
-    frozen render's replay (render/frozen.py), and peak memory; each (kind, N)
-    in processes of its own (``rounds`` of them, alternating kinds; medians).
-    The first render loads its kernels from Dr.Jit's disk cache when an
-    earlier run compiled them."""
+    environment), plugin vs built-in (catalog.BENCH_MATERIAL_PAIRS) and the
+    floor beside them: the same BSDF as a bare Python mi.BSDF without the
+    framework (tools/bench/floor.py, catalog.BENCH_FLOORS), what Python itself
+    costs. First and warm render split into tracing, code generation and kernel
+    execution, a frozen render's replay (render/frozen.py), and peak memory;
+    each (kind, N) in processes of its own (``rounds`` of them, alternating
+    kinds; medians). The first render loads its kernels from Dr.Jit's disk
+    cache when an earlier run compiled them."""
     rows = []
     for plugin, builtin in catalog.BENCH_MATERIAL_PAIRS:
+        floor = catalog.BENCH_FLOORS[plugin]
+        kinds = {"plugin": plugin, "builtin": builtin, "floor": floor}
         for n in s.materials:
             # Each (kind, n) in processes of its own, the kinds alternating; the
             # median over the rounds of each process's figures.
-            runs: dict[str, list[dict]] = {plugin: [], builtin: []}
+            runs: dict[str, list[dict]] = {side: [] for side in kinds}
             for _ in range(s.rounds):
-                for kind in (plugin, builtin):
-                    runs[kind].append(in_subprocess("materials", kind=kind, n=n,
+                for side, kind in kinds.items():
+                    runs[side].append(in_subprocess("materials", kind=kind, n=n,
                                                     res=s.materials_res, spp=s.materials_spp,
                                                     repeats=s.repeats))
-            row = {"name": f"{plugin} vs {builtin}", "materials": n}
-            for side, kind in (("plugin", plugin), ("builtin", builtin)):
+            row = {"name": f"{plugin} vs {builtin}", "materials": n, "floor": floor}
+            for side in kinds:
                 for column, key in MATERIALS_COLUMNS.items():
-                    row[f"{side}_{column}"] = statistics.median(r[key] for r in runs[kind])
+                    row[f"{side}_{column}"] = statistics.median(r[key] for r in runs[side])
             row["first_ratio"] = row["plugin_first_s"] / row["builtin_first_s"]
             row["warm_ratio"] = row["plugin_warm_s"] / row["builtin_warm_s"]
             row["execution_ratio"] = row["plugin_execution_s"] / row["builtin_execution_s"]
             row["frozen_ratio"] = row["plugin_frozen_s"] / row["builtin_frozen_s"]
             row["memory_ratio"] = row["plugin_peak_mib"] / row["builtin_peak_mib"]
+            row["floor_warm_ratio"] = row["floor_warm_s"] / row["builtin_warm_s"]
+            row["warm_vs_floor"] = row["plugin_warm_s"] / row["floor_warm_s"]
             rows.append(row)
     return rows
 
@@ -266,10 +276,13 @@ def kernels(s: Settings, refs: References) -> list[dict]:
 
 
 def tracing(s: Settings, refs: References) -> list[dict]:
-    """Tracing time of one call of each method, plugin vs built-in, and what the
-    plugin's call does: texture evaluations, Mitsuba objects built, BSDF methods
-    it calls again, helpers called more than once, and how often a path-traced
-    render calls each method."""
+    """Tracing time of one call of each method, plugin vs built-in and, where
+    there is one (catalog.BENCH_TRACING_FLOORS), the floor: the same BSDF as a
+    bare Python mi.BSDF (tools/bench/floor.py); the Dr.Jit variables one call
+    creates (from Dr.Jit's trace log); and what the plugin's call does:
+    texture evaluations, Mitsuba objects built, BSDF methods it calls again,
+    helpers called more than once, and how often a path-traced render calls
+    each method."""
     return in_subprocess("tracing", lanes=1024, calls=25 * s.repeats)["rows"]
 
 

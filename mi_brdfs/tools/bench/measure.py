@@ -170,6 +170,21 @@ def timed(scene, spp: int, repeats: int) -> dict:
             "codegen_s": split["codegen_s"], "tracing_s": split["tracing_s"]}
 
 
+def alternating(scenes: dict, spp: int, repeats: int) -> dict[str, dict]:
+    """Per scene (name -> scene): the median wall and kernel execution time of
+    ``repeats`` renders, the scenes taking turns after a warm-up render each,
+    so that a change of the machine's load hits them alike."""
+    for scene in scenes.values():
+        render(scene, spp, seed=0)
+    runs: dict[str, list[dict]] = {name: [] for name in scenes}
+    for r in range(repeats):
+        for name, scene in scenes.items():
+            runs[name].append(measured(lambda: render(scene, spp, seed=r + 1)))
+    return {name: {"median_s": statistics.median(m["wall_s"] for m in ms),
+                   "execution_s": statistics.median(m["execution_s"] for m in ms)}
+            for name, ms in runs.items()}
+
+
 def measured(run) -> dict:
     """Wall time of ``run()`` (which must evaluate its result) and its split from
     Dr.Jit's kernel history (s): code generation (codegen and LLVM), kernel

@@ -114,7 +114,7 @@ def materials(rows):
     for ax, name in zip(fig.subplots(1, len(names), squeeze=False)[0], names):
         pair = [r for r in rows if r["name"] == name]
         n = [r["materials"] for r in pair]
-        for side, style in (("plugin", "o-"), ("builtin", "s--")):
+        for side, style in (("plugin", "o-"), ("builtin", "s--"), ("floor", "^:")):
             ax.plot(n, [r[f"{side}_warm_s"] for r in pair], style, label=f"{side} warm")
             ax.plot(n, [r[f"{side}_tracing_s"] for r in pair], style, alpha=0.5,
                     label=f"{side} tracing")

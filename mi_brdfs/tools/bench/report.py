@@ -91,20 +91,23 @@ def energy(rows: list[dict]) -> str:
     ratios = ", ".join(f"{r['name']} {r['ratio']:.2f}x" for r in rows)
     tables = [r for r in rows if r["table_build_s"] > 0]
     return (f"Energy compensation, render time on / off: {ratios} (goal <= 1.10: "
-            f"{'met' if all(r['ratio'] <= 1.10 for r in rows) else 'not met'}). "
+            f"{'met' if all(r['ratio'] <= 1.10 for r in rows) else 'not met'}; kernel "
+            "execution on / off: " + ", ".join(f"{r['name']} {r['execution_ratio']:.2f}x"
+                                               for r in rows) + "). "
             f"Building a table ({tables[0]['table_samples']}² samples per node): "
             + ", ".join(f"{r['table']} {r['table_build_s']:.2f} s" for r in tables) + ".")
 
 
 def materials(rows: list[dict]) -> str:
-    """Plugin vs built-in at the largest number of materials, and the tracing
-    cost per material (slope of the warm render's tracing time over N)."""
+    """Plugin vs built-in at the largest number of materials, beside the floor
+    (a bare Python BSDF), and the tracing cost per material (slope of the warm
+    render's tracing time over N)."""
     most = max(r["materials"] for r in rows)
     ratios = ", ".join(
-        f"{r['name'].split(' vs ')[0]} {r['warm_ratio']:.2f}x (first render "
-        f"{r['first_ratio']:.2f}x, kernel execution {r['execution_ratio']:.2f}x, frozen replay "
-        f"{r['frozen_ratio']:.2f}x, peak memory "
-        f"{r['plugin_peak_mib']:.0f} vs {r['builtin_peak_mib']:.0f} MiB)"
+        f"{r['name'].split(' vs ')[0]} {r['warm_ratio']:.2f}x (its floor, a bare Python "
+        f"BSDF, {r['floor_warm_ratio']:.2f}x; first render {r['first_ratio']:.2f}x, kernel "
+        f"execution {r['execution_ratio']:.2f}x, frozen replay {r['frozen_ratio']:.2f}x, "
+        f"peak memory {r['plugin_peak_mib']:.0f} vs {r['builtin_peak_mib']:.0f} MiB)"
         for r in rows if r["materials"] == most)
     slopes = []
     for name in dict.fromkeys(r["name"] for r in rows):
@@ -112,8 +115,8 @@ def materials(rows: list[dict]) -> str:
         if len(pair) > 1:
             n = [r["materials"] for r in pair]
             per = [1e3 * np.polyfit(n, [r[f"{side}_tracing_s"] for r in pair], 1)[0]
-                   for side in ("plugin", "builtin")]
-            slopes.append(f"{name} {per[0]:.2f} vs {per[1]:.2f} ms")
+                   for side in ("plugin", "builtin", "floor")]
+            slopes.append(f"{name} {per[0]:.2f} vs {per[1]:.2f} ms (floor {per[2]:.2f} ms)")
     return (f"{most} spheres, each with its own material: plugin / built-in warm render time "
             f"{ratios}. Tracing per material (plugin vs built-in): {', '.join(slopes)}.")
 
@@ -140,10 +143,12 @@ def kernels(rows: list[dict]) -> str:
 def tracing(rows: list[dict]) -> str:
     name = rows[0]["name"]
     r = {row["method"]: row for row in rows if row["name"] == name}
+    floor = lambda m: (f", the floor {r[m]['floor_ms']:.3f} ms" if "floor_ms" in r[m] else "")
     return (f"Tracing one call ({name}): sample {r['sample']['plugin_ms']:.3f} ms vs "
-            f"{r['sample']['builtin_ms']:.3f} ms ({r['sample']['ratio']:.1f}x), eval_pdf "
-            f"{r['eval_pdf']['plugin_ms']:.3f} vs {r['eval_pdf']['builtin_ms']:.3f} ms "
-            f"({r['eval_pdf']['ratio']:.1f}x). Tracing a path-traced render calls each "
+            f"{r['sample']['builtin_ms']:.3f} ms ({r['sample']['ratio']:.1f}x{floor('sample')}; "
+            f"{r['sample']['plugin_vars']} Dr.Jit variables vs {r['sample']['builtin_vars']}), "
+            f"eval_pdf {r['eval_pdf']['plugin_ms']:.3f} vs {r['eval_pdf']['builtin_ms']:.3f} ms "
+            f"({r['eval_pdf']['ratio']:.1f}x{floor('eval_pdf')}). Tracing a path-traced render calls each "
             f"instance's sample {r['sample']['render_calls']} and eval_pdf "
             f"{r['eval_pdf']['render_calls']} times (eval and pdf "
             f"{r['eval']['render_calls_all']} times); one sample call makes "
@@ -215,12 +220,14 @@ def markdown(results: dict, about: dict[str, str], images: str = "") -> str:
     for group, rows in results["groups"].items():
         if not rows:
             continue
-        keys = [k for k in rows[0] if not isinstance(rows[0][k], list)]
+        # every row's keys, in order (a row may lack some: e.g. no floor beside it)
+        keys = [k for k in dict.fromkeys(k for r in rows for k in r)
+                if not any(isinstance(r.get(k), list) for r in rows)]
         lines += [f"## {group}", ""]
         if about.get(group):
             lines += [about[group], ""]
         lines += ["| " + " | ".join(keys) + " |", "|" + "---|" * len(keys)]
-        lines += ["| " + " | ".join(_fmt(r[k]) for k in keys) + " |" for r in rows]
+        lines += ["| " + " | ".join(_fmt(r.get(k, "")) for k in keys) + " |" for r in rows]
         lines += ["", *(f"![{p}]({images}{p})" for p in results["plots"].get(group, [])), ""]
     return "\n".join(lines)
 

@@ -14,7 +14,7 @@ import statistics
 import time
 
 from .. import catalog
-from .anatomy import call_anatomy, calls_in_a_render
+from .anatomy import call_anatomy, calls_in_a_render, variables_created
 from .measure import BSDF_METHODS, bsdf_call, bsdf_inputs, measured, peak_mib, render, spheres_scene
 
 RESULT = "mi-brdfs-bench-result "       # the mark of the result line
@@ -35,6 +35,9 @@ def in_subprocess(task: str, **options) -> dict:
 def main(task: str, options: str) -> int:
     """``python -m mi_brdfs.tools.bench --worker TASK OPTIONS_JSON``: one result line."""
     import mi_brdfs  # noqa: F401  (LLVM set-up, plugins registered)
+
+    from . import floor
+    floor.register()                 # the bare Python BSDFs measured beside the plugins
     result = TASKS[task](**json.loads(options))
     result["peak_mib"] = peak_mib()
     print(RESULT + json.dumps(result), flush=True)
@@ -130,7 +133,8 @@ def kernels(lanes: int, repeats: int) -> dict:
 
 
 def tracing(lanes: int, calls: int) -> dict:
-    """Tracing time of each BSDF call (no evaluation), plugin vs built-in, and
+    """Tracing time of each BSDF call (no evaluation), plugin vs built-in (and
+    the floor, where there is one), the Dr.Jit variables each call creates, and
     the anatomy of the plugin's call."""
     import mitsuba as mi
     pairs = [*catalog.BENCH_BUILTIN, catalog.BENCH_TWO_LOBES]
@@ -142,21 +146,28 @@ def tracing(lanes: int, calls: int) -> dict:
     x = bsdf_inputs(lanes)
     rows = []
     for name, p, b in pairs:
-        plugin, builtin = mi.load_dict(p), mi.load_dict(b)
+        sides = {"plugin": mi.load_dict(p), "builtin": mi.load_dict(b)}
+        if name in catalog.BENCH_TRACING_FLOORS:
+            sides["floor"] = mi.load_dict(catalog.BENCH_TRACING_FLOORS[name])
         for method in BSDF_METHODS:
             row = {"name": name, "method": method}
-            for side, bsdf in (("plugin", plugin), ("builtin", builtin)):
+            times: dict[str, list[float]] = {side: [] for side in sides}
+            for bsdf in sides.values():
                 bsdf_call(bsdf, method, x)
-                times = []
-                for _ in range(calls):
+            for _ in range(calls):                    # the sides alternating
+                for side, bsdf in sides.items():
                     start = time.perf_counter()
                     out = bsdf_call(bsdf, method, x)
-                    times.append(time.perf_counter() - start)
+                    times[side].append(time.perf_counter() - start)
                     del out
-                row[f"{side}_ms"] = 1e3 * statistics.median(times)
+            for side, bsdf in sides.items():
+                row[f"{side}_ms"] = 1e3 * statistics.median(times[side])
+                row[f"{side}_vars"] = variables_created(lambda: bsdf_call(bsdf, method, x))
             row["ratio"] = row["plugin_ms"] / row["builtin_ms"]
+            if "floor" in sides:
+                row["ms_vs_floor"] = row["plugin_ms"] / row["floor_ms"]
             row["render_calls"], row["render_calls_all"] = in_render[name][method]
-            row.update(call_anatomy(plugin, method, x))
+            row.update(call_anatomy(sides["plugin"], method, x))
             rows.append(row)
     return {"rows": rows}
 

@@ -243,7 +243,7 @@ class CookTorrance(BRDF):
 
     def f_specular(self, inp, si, wo):
         return Scaled(inp.colour_s, specular(si.wi, wo, inp.alpha, self.switch("f0"),
-                                        self.distribution, self.geometry))
+                                             self.distribution, self.geometry))
 
     def selection_weights(self, inp, si):
         w_d = w_s = mi.Float(0.0)

@@ -168,14 +168,17 @@ def trade(rows: list[dict]) -> str | None:
         best = min(mine, key=lambda r: r["brdf_error"])
         close = [r for r in mine if r["brdf_error"] <= best["brdf_error"] + 0.05]
         cheap = min(close, key=lambda r: r["cost_ratio"])
-        part = f"{material}: {best['model']} ({best['brdf_error']:.3f}, cost {best['cost_ratio']:.2f}x)"
-        if cheap is not best:
-            part += (f", or {cheap['model']} ({cheap['brdf_error']:.3f}, "
-                     f"cost {cheap['cost_ratio']:.2f}x)")
+        def fit(r):
+            flip = "" if r.get("image_flip") is None else f", FLIP {r['image_flip']:.2f}"
+            return f"{r['model']} ({r['brdf_error']:.3f}{flip}, cost {r['cost_ratio']:.2f}x)"
+        part = f"{material}: {fit(best)}" + ("" if cheap is best else f", or {fit(cheap)}")
         parts.append(part)
-    return ("Which model for which material (BRDF error, 0 = identical, 1 = black; render "
-            "cost against the material's own plugin): " + "; ".join(parts) + ". The fit "
-            "report with every model's error, renders and XML is in trade/index.html.")
+    return ("Which model for which material (BRDF error, 0 = identical, 1 = black; the "
+            "image's FLIP in the standard scene; render cost against the material's own "
+            "plugin): " + "; ".join(parts) + ". The BRDF error weighs the specular peaks, "
+            "which grow towards grazing angles, far above a diffuse colour: where FLIP is "
+            "high with a low BRDF error, the fit matched the highlight, not the colour. "
+            "The fit report with every model's error, renders and XML is in trade/index.html.")
 
 
 # ----------------------------------------------------------------------------

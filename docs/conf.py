@@ -31,7 +31,7 @@ extensions = [
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
 myst_enable_extensions = ["dollarmath", "colon_fence"]
 myst_heading_anchors = 3
-exclude_patterns = ["_build", "benchmarks/README.md", "validation/**", "notebooks/**",
+exclude_patterns = ["_build", "benchmarks/**", "validation/**", "notebooks/**",
                     "Thumbs.db", ".DS_Store"]
 
 autodoc_member_order = "bysource"

@@ -28,8 +28,8 @@ is what the model's own single scattering E_ss misses (clamped at 0; E_ss is
 linear in F0). This g holds both of what single scattering loses: the light
 of bounces k >= 2 and, for the separable Smith G1(ω_i) G1(ω_o), the energy
 it loses beyond the real (height-correlated) microsurface's single scattering,
-1 / (1 + Λ_i + Λ_o) >= G1 G1 (measured, ``python -m mi_brdfs.tools.tables
---check``: see ``docs/guide/energy.md``). For the Blinn D and the V-cavity G,
+1 / (1 + Λ_i + Λ_o) >= G1 G1 (measured by ``python -m mi_brdfs.tools.groundtruth
+--decomposition``: see ``docs/guide/energy.md``). For the Blinn D and the V-cavity G,
 whose microsurfaces have no random walk, W is that of the nearest Smith
 microsurface (Beckmann at the same α for Blinn, whose exponent 2/α² - 2 is
 Walter's mapping; the same D with Smith's G for the V-cavity).
@@ -52,7 +52,7 @@ direction (cos θ_i, and sin²φ_i for anisotropic lobes), then the model's
 parameters (roughness, exponent). E is clamped to [0, 1] (Ward's albedo
 exceeds 1 within a fraction of a degree of the horizon; there no light is
 added). The node μ = 0 holds E at μ = ``MU_MIN``; a roughness axis reaches α
-= ∞ (the ``ratio`` warp), where E = 0. W is tabulated by the random walk
+= ∞ (the ``ratio`` or ``root`` warp), where E = 0. W is tabulated by the random walk
 (:class:`WalkSpec`, ``WALK_PATHS`` paths per node on common random numbers)
 up to α = 9; beyond, its F0 dependence is held there (the walk's keeps
 darkening towards 0 for F0 < 1; a white surface stays exact).

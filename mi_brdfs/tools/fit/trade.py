@@ -9,7 +9,8 @@ which writes the fit report there, with ``trade.md`` (the table) beside
 aluminium (spectral indices of refraction, through their RGB response in
 ``llvm_ad_rgb``) at α 0.1 and 0.3, ``roughplastic`` (a red-brown plastic) at
 α 0.1 and 0.3, ``principled`` as a rough dielectric and as a brass-like
-metal, and ``diffuse``. Every distribution is Mitsuba's default (Beckmann).
+metal, and ``diffuse``. The conductors and plastics have Mitsuba's default
+distribution (Beckmann); ``principled`` is GGX.
 """
 from __future__ import annotations
 

@@ -772,6 +772,17 @@ class BRDF:
     def eval_textures(self, si, active) -> SimpleNamespace:
         return SimpleNamespace()
 
+    def with_colours(self, si, active, **shape) -> SimpleNamespace:
+        """``eval_textures`` of a model with ``diffuse_reflectance`` and
+        ``specular_reflectance``: its evaluated shape parameters (``shape``) and
+        the lecture's m_D, m_S for the lobes present (``colour_d``, ``colour_s``)."""
+        inp = SimpleNamespace(**shape)
+        if self.diffuse:
+            inp.colour_d = self.m_diffuse_reflectance.eval(si, active)
+        if self.specular:
+            inp.colour_s = self.m_specular_reflectance.eval(si, active)
+        return inp
+
     def f_diffuse(self, inp, si, wo):
         raise NotImplementedError
 

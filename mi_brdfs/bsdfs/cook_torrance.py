@@ -48,7 +48,6 @@ albedo is k·m_D + (1 - k)·(the compensated specular).
 from __future__ import annotations
 
 from dataclasses import replace
-from types import SimpleNamespace
 
 import drjit as dr
 import mitsuba as mi
@@ -227,12 +226,8 @@ class CookTorrance(BRDF):
         return not (self.off("k", 1.0) or self.off("specular_reflectance"))
 
     def eval_textures(self, si, active):
-        inp = SimpleNamespace(alpha=dr.fmax(self.m_alpha.eval_1(si, active), mf.ALPHA_MIN))
-        if self.diffuse:
-            inp.colour_d = self.m_diffuse_reflectance.eval(si, active)
-        if self.specular:
-            inp.colour_s = self.m_specular_reflectance.eval(si, active)
-        return inp
+        return self.with_colours(si, active,
+                                 alpha=dr.fmax(self.m_alpha.eval_1(si, active), mf.ALPHA_MIN))
 
     def lobe_weights(self, inp):
         k = self.switch("k")

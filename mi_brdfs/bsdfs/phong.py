@@ -54,8 +54,6 @@ smooth (C2) in γ.
 """
 from __future__ import annotations
 
-from types import SimpleNamespace
-
 import drjit as dr
 import mitsuba as mi
 
@@ -157,12 +155,7 @@ class Phong(BRDF):
         return not self.off("specular_reflectance")
 
     def eval_textures(self, si, active):
-        inp = SimpleNamespace(gamma=self.m_exponent.eval_1(si, active))
-        if self.diffuse:
-            inp.colour_d = self.m_diffuse_reflectance.eval(si, active)
-        if self.specular:
-            inp.colour_s = self.m_specular_reflectance.eval(si, active)
-        return inp
+        return self.with_colours(si, active, gamma=self.m_exponent.eval_1(si, active))
 
     def f_diffuse(self, inp, si, wo):
         return lambert.f(inp.colour_d, mi.Frame3f.cos_theta(wo), self.mode)

@@ -75,8 +75,6 @@ horizon) E is clamped to 1: nothing is added there.
 """
 from __future__ import annotations
 
-from types import SimpleNamespace
-
 import drjit as dr
 import mitsuba as mi
 
@@ -267,12 +265,7 @@ class Ward(BRDF):
             alpha_b = dr.fmax(self.m_alpha_v.eval_1(si, active), ALPHA_MIN)
         else:
             alpha_t = alpha_b = dr.fmax(self.m_alpha.eval_1(si, active), ALPHA_MIN)
-        inp = SimpleNamespace(alpha_t=alpha_t, alpha_b=alpha_b)
-        if self.diffuse:
-            inp.colour_d = self.m_diffuse_reflectance.eval(si, active)
-        if self.specular:
-            inp.colour_s = self.m_specular_reflectance.eval(si, active)
-        return inp
+        return self.with_colours(si, active, alpha_t=alpha_t, alpha_b=alpha_b)
 
     def f_diffuse(self, inp, si, wo):
         return lambert.f(inp.colour_d, mi.Frame3f.cos_theta(wo), self.mode)

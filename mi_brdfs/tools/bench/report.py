@@ -162,15 +162,16 @@ def trade(rows: list[dict]) -> str | None:
     done = [r for r in rows if not r["failed"]]
     if not done:
         return None
+    def fit(r):
+        flip = "" if r.get("image_flip") is None else f", FLIP {r['image_flip']:.2f}"
+        return f"{r['model']} ({r['brdf_error']:.3f}{flip}, cost {r['cost_ratio']:.2f}x)"
+
     parts = []
     for material in dict.fromkeys(r["material"] for r in done):
         mine = [r for r in done if r["material"] == material]
         best = min(mine, key=lambda r: r["brdf_error"])
         close = [r for r in mine if r["brdf_error"] <= best["brdf_error"] + 0.05]
         cheap = min(close, key=lambda r: r["cost_ratio"])
-        def fit(r):
-            flip = "" if r.get("image_flip") is None else f", FLIP {r['image_flip']:.2f}"
-            return f"{r['model']} ({r['brdf_error']:.3f}{flip}, cost {r['cost_ratio']:.2f}x)"
         part = f"{material}: {fit(best)}" + ("" if cheap is best else f", or {fit(cheap)}")
         parts.append(part)
     return ("Which model for which material (BRDF error, 0 = identical, 1 = black; the "

@@ -1,10 +1,17 @@
 """Shared fixtures; the helpers live in support.py (one place for every test module)."""
+import os
+
 import numpy as np
 import pytest
 
 import mi_brdfs  # noqa: F401  (LLVM set-up, variant, plugin registration)
 from support import BrokenEntry
 from support import eval_and_pdf, random_hemisphere, surface, vec  # noqa: F401  (for older modules)
+
+# A command a test runs in a subprocess (mi-brdfs validate, render, ...) that
+# dies by a signal prints its Python traceback on its stderr, which the test's
+# failure message shows: a crash names the line it happened at.
+os.environ.setdefault("PYTHONFAULTHANDLER", "1")
 
 
 @pytest.hookimpl(tryfirst=True)

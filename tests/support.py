@@ -15,6 +15,7 @@ import numpy as np
 import mi_brdfs  # noqa: F401  (LLVM set-up, variant, plugin registration)
 import drjit as dr
 import mitsuba as mi
+from mi_brdfs._jit import from_numpy
 
 # ----------------------------------------------------------------------------
 #  Directions and evaluation
@@ -60,24 +61,16 @@ def mirror_pairs(rng, n, width=0.3, min_cos=0.02):
     return f32(unit(wi)), f32(unit(wo))
 
 
-def jit(x):
-    """A Dr.Jit array in Dr.Jit's own (aligned) memory. Arrays made from NumPy
-    may keep NumPy's buffer, whose alignment varies from run to run and is part
-    of a kernel's hash: the same test would then compile its kernels again."""
-    return dr.copy(x)
-
-
 def vec(a) -> mi.Vector3f:
-    a = np.asarray(a, dtype=np.float64)
-    return jit(mi.Vector3f(a[:, 0], a[:, 1], a[:, 2]))
+    return from_numpy(mi.Vector3f, np.asarray(a, dtype=np.float64).T)
 
 
 def floats(a) -> mi.Float:
-    return jit(mi.Float(np.asarray(a, dtype=np.float64)))
+    return from_numpy(mi.Float, a)
 
 
 def points(x, y) -> mi.Point2f:
-    return jit(mi.Point2f(np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)))
+    return from_numpy(mi.Point2f, (x, y))
 
 
 def surface(wi, uv=None) -> mi.SurfaceInteraction3f:

@@ -86,6 +86,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from .._jit import from_numpy
 from .grid import Axis, Grid, hemisphere_direction, midpoints
 
 DATA = os.path.join(os.path.dirname(__file__), "data", "albedo.npz")
@@ -359,11 +360,11 @@ def build(spec: AlbedoSpec, samples: int | None = None, batch: int = 1 << 22) ->
     for start in range(0, len(grid), step):
         sl = slice(start, min(start + step, len(grid)))
         n = sl.stop - sl.start
-        node = mi.UInt32(np.repeat(np.arange(n, dtype=np.uint32), per))
-        take = lambda a: dr.gather(mi.Float, mi.Float(np.ascontiguousarray(a[sl])), node)
+        node = from_numpy(mi.UInt32, np.repeat(np.arange(n, dtype=np.uint32), per))
+        take = lambda a: dr.gather(mi.Float, from_numpy(mi.Float, a[sl]), node)
         wi = mi.Vector3f(take(wi_np[:, 0]), take(wi_np[:, 1]), take(wi_np[:, 2]))
         params = [take(params_np[:, k]) for k in range(params_np.shape[1])]
-        sample2 = mi.Point2f(np.tile(ux, n), np.tile(uy, n))
+        sample2 = from_numpy(mi.Point2f, (np.tile(ux, n), np.tile(uy, n)))
         wo = spec.sample(wi, sample2, *params)
         pdf = spec.pdf(wi, wo, *params)
         ok = (pdf > 0) & (mi.Frame3f.cos_theta(wo) > 0)

@@ -42,6 +42,9 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from .._jit import from_numpy
+
+
 def bspline(t):
     """The cubic B-spline weights of coefficients k-1, k, k+1, k+2 at t in
     [0, 1] of cell [k, k+1]: non-negative, summing to 1 (Dr.Jit or NumPy)."""
@@ -221,7 +224,7 @@ class Grid:
         self.stored = stored              # node values (linear axes), coefficients (smooth)
         self.strides = [int(np.prod(stored.shape[k + 1:])) for k in range(len(axes))]
         self.data_np = stored.astype(np.float32).ravel()
-        self.data = mi.Float(self.data_np) if dr.is_jit_v(mi.Float) else None
+        self.data = from_numpy(mi.Float, self.data_np) if dr.is_jit_v(mi.Float) else None
 
     def __call__(self, *xs, data=None):
         """The interpolated value at the point (x_1, …, x_d) (Dr.Jit, per lane),

@@ -8,6 +8,8 @@ import math
 
 import numpy as np
 
+from .._jit import from_numpy
+
 
 def _si(theta_i_deg: float, phi_i_deg: float = 180.0):
     """A surface interaction whose viewer is at theta_i (opaque: one kernel for all angles)."""
@@ -26,7 +28,7 @@ def eval_at_viewer(bsdf, theta_i_deg: float, wo: np.ndarray, phi_i_deg: float = 
     """eval(wi, wo) (f·cos theta_o, per channel) for the viewer at theta_i and an (N, 3) array wo."""
     import mitsuba as mi
     value = bsdf.eval(mi.BSDFContext(), _si(theta_i_deg, phi_i_deg),
-                      mi.Vector3f(wo[:, 0], wo[:, 1], wo[:, 2]))
+                      from_numpy(mi.Vector3f, wo.T))
     return np.array(value).T
 
 
@@ -61,7 +63,7 @@ def directional_albedo(bsdf, angles, strata: tuple[int, int] = (512, 2048), seed
     u = ((np.arange(nu)[:, None] + rng.random((nu, nv))) / nu).ravel()
     v = ((np.arange(nv)[None, :] + rng.random((nu, nv))) / nv).ravel()
     s = np.sqrt(np.maximum(0.0, 1.0 - u * u))
-    wo = mi.Vector3f(s * np.cos(2 * np.pi * v), s * np.sin(2 * np.pi * v), u)
+    wo = from_numpy(mi.Vector3f, (s * np.cos(2 * np.pi * v), s * np.sin(2 * np.pi * v), u))
     out = []
     for theta in angles:
         value = bsdf.eval(mi.BSDFContext(), _si(theta, 0.0), wo)

@@ -42,6 +42,8 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from .._jit import from_numpy
+
 TOLERANCE = 0.25         # allowed integration error, in units of a cell's Poisson noise
 START_IRES = 9           # points per cell and axis of the first table (8 intervals)
 MAX_IRES = 1025          # points per cell and axis, at most (1024 intervals)
@@ -82,7 +84,7 @@ class ConvergedChiSquareTest(mi.chi2.ChiSquareTest):
             self._log(f"Failure: the density's integral did not converge in {self.unconverged} "
                       f"cells at {n} x {n} points per cell")
             self.fail = True
-        self.pdf = mi.Float(table.astype(np.float32))
+        self.pdf = from_numpy(mi.Float, table)
         self.pdf_sum = dr.sum(self.pdf) / self.sample_count
         if not float(np.min(table)) >= 0:
             self._log("Failure: Encountered a cell with a negative PDF value")
@@ -102,7 +104,7 @@ class ConvergedChiSquareTest(mi.chi2.ChiSquareTest):
     def _integrate_chunk(self, cells: np.ndarray, n: int) -> np.ndarray:
         points = n * n
         index = dr.arange(mi.UInt32, cells.size * points)
-        cell = dr.gather(mi.UInt32, mi.UInt32(cells), index // points)
+        cell = dr.gather(mi.UInt32, from_numpy(mi.UInt32, cells), index // points)
         k = index % points
         cell_2d = mi.Vector2u(cell % self.res.x, cell // self.res.x)
         k_2d = mi.Vector2u(k % n, k // n)

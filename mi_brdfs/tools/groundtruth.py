@@ -57,6 +57,8 @@ import os
 import numpy as np
 from scipy.special import erf, erfinv
 
+from .._jit import from_numpy
+
 DISTRIBUTIONS = ("ggx", "beckmann")
 UP = 0.9999            # the code's |w.z| beyond which a direction is the normal itself
 FLAT = 1e-4            # the code's |w.z| below which a ray stays at its height
@@ -420,7 +422,7 @@ def compensated_albedo(config: dict, thetas, n: int = 1024, seed: int = 7) -> np
 
     rng = np.random.default_rng(seed)
     i, j = (a.ravel() for a in np.meshgrid(np.arange(n), np.arange(n), indexing="ij"))
-    u = mi.Point2f((i + rng.random(i.size)) / n, (j + rng.random(j.size)) / n)
+    u = from_numpy(mi.Point2f, ((i + rng.random(i.size)) / n, (j + rng.random(j.size)) / n))
     wo = mi.warp.square_to_uniform_hemisphere(u)
     bsdf = mi.load_dict(config)
     out = []

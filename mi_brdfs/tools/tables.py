@@ -31,6 +31,8 @@ from dataclasses import replace
 
 import numpy as np
 
+from .._jit import from_numpy
+
 MU_85 = 0.0871557      # cos 85°
 CHECK_ROWS = (4, 12, 20, 28)   # the μ rows of a walk table that --check walks again
 
@@ -54,7 +56,7 @@ def interpolation_error(spec, table, samples: int, bounded: bool = False) -> tup
     exact = exact[centres]
     points = [a.nodes()[1::2] for a in fine.axes]
     mesh = [m.ravel() for m in np.meshgrid(*points, indexing="ij")]
-    interp = np.asarray(table.grid(*[mi.Float(m) for m in mesh])).reshape(exact.shape)
+    interp = np.asarray(table.grid(*[from_numpy(mi.Float, m) for m in mesh])).reshape(exact.shape)
     dr.eval()
     err = np.abs(exact - np.clip(interp, 0, 1))
     if spec.valid_up_to is not None:        # beyond: extrapolated, not the model's
@@ -94,8 +96,8 @@ def check_walk(spec, paths: int, log) -> str:
         walked = groundtruth.albedo(spec.distribution, max(mu, energy.MU_MIN), a_mid, f_mid,
                                     paths, energy.WALK_SEED)
         A, F = np.meshgrid(a_mid, f_mid, indexing="ij")
-        interp = np.asarray(grid(mi.Float(np.full(A.size, mu)), mi.Float(A.ravel()),
-                                 mi.Float(F.ravel()))).reshape(A.shape)
+        interp = np.asarray(grid(from_numpy(mi.Float, np.full(A.size, mu)),
+                                 from_numpy(mi.Float, A), from_numpy(mi.Float, F))).reshape(A.shape)
         worst = max(worst, float(np.abs(interp - walked).max()))
         log(f"  {spec.name}: checked mu row {i}")
     return (f"{spec.name}: axes {'x'.join(str(a.n) for a in spec.axes)}; Monte-Carlo noise "

@@ -72,6 +72,7 @@ from typing import Callable
 
 import numpy as np
 
+from .._jit import from_numpy
 from . import analysis, catalog, compare, outputs
 from .chi2 import ConvergedChiSquareTest
 
@@ -234,9 +235,9 @@ def fresnel_section(seed: int = 5) -> list[dict]:
 
     def eval_pairs(config):
         si = dr.zeros(mi.SurfaceInteraction3f, FRESNEL_PAIRS)
-        si.wi = mi.Vector3f(wi[:, 0], wi[:, 1], wi[:, 2])
+        si.wi = from_numpy(mi.Vector3f, wi.T)
         value = mi.load_dict(config).eval(mi.BSDFContext(), si,
-                                          mi.Vector3f(wo[:, 0], wo[:, 1], wo[:, 2]))
+                                          from_numpy(mi.Vector3f, wo.T))
         return np.array(value, dtype=np.float64)[0]
 
     rows = []
@@ -395,8 +396,8 @@ def sampling_section(size: Size, models: dict, count: int | None = None) -> list
                 rng = np.random.default_rng(11)
                 si = dr.zeros(mi.SurfaceInteraction3f, n)
                 si.wi = mi.Vector3f(viewer(theta, case.phi))
-                _, weight = bsdf.sample(mi.BSDFContext(), si, mi.Float(rng.random(n)),
-                                        mi.Point2f(rng.random(n), rng.random(n)))
+                _, weight = bsdf.sample(mi.BSDFContext(), si, from_numpy(mi.Float, rng.random(n)),
+                                        from_numpy(mi.Point2f, rng.random((2, n))))
                 w = np.array(weight).mean(axis=0)
                 rows.append({"model": name, "config": label, "theta": theta, "phi": case.phi,
                              "passed": passed, "p_value": float(chi2.p_value),

@@ -9,6 +9,7 @@ import pytest
 
 import mitsuba as mi
 
+from mi_brdfs._jit import from_numpy
 import lecture
 from support import albedo, assert_refused, eval_and_pdf, random_hemisphere, rgb
 
@@ -98,7 +99,7 @@ def test_beckmann_g1(rng):
     from mi_brdfs.bsdfs import microfacet as mf
     mu = np.concatenate([np.linspace(1e-6, 1.0 - 1e-7, 20001), 10.0 ** rng.uniform(-30, 0, 4000)])
     s = np.sqrt(1.0 - mu**2)
-    v = mi.Vector3f(s.astype(np.float32), np.zeros(mu.size, np.float32), mu.astype(np.float32))
+    v = from_numpy(mi.Vector3f, (s, np.zeros(mu.size), mu))
     mu32, s32 = np.array(v.z, dtype=np.float64), np.array(v.x, dtype=np.float64)
     for rho in (mf.ALPHA_MIN, 0.01, 0.1, 0.3, 1.0, 5.0):
         g1 = np.array(mf.g1("beckmann", v, mi.Float(rho)), dtype=np.float64)
@@ -216,7 +217,7 @@ def test_blinn_distribution_is_normalised(alpha):
     quadrature in theta log-spaced towards the normal; alpha = 0 is the clamped minimum."""
     from mi_brdfs.bsdfs import microfacet as mf
     t = np.logspace(-9, np.log10(np.pi / 2), 200_000)
-    m = mi.Vector3f(np.sin(t), 0 * t, np.cos(t))
+    m = from_numpy(mi.Vector3f, (np.sin(t), 0 * t, np.cos(t)))
     d = np.array(mf.D["blinn"](m, mi.Float(max(alpha, mf.ALPHA_MIN))), dtype=np.float64)
     assert np.isfinite(d).all()
     integral = np.trapezoid(d * np.cos(t) * np.sin(t) * 2 * np.pi, t)
@@ -230,7 +231,7 @@ def test_blinn_sampler_keeps_narrow_lobes(alpha):
     from mi_brdfs.bsdfs import microfacet as mf
     rng = np.random.default_rng(9)
     n = 1_000_000
-    m = mf.sample_blinn(mi.Point2f(rng.random(n), rng.random(n)), mi.Float(alpha))
+    m = mf.sample_blinn(from_numpy(mi.Point2f, rng.random((2, n))), mi.Float(alpha))
     sin2 = np.array(m.x, dtype=np.float64) ** 2 + np.array(m.y, dtype=np.float64) ** 2
     e = 2 / alpha**2 - 1
     assert sin2.mean() == pytest.approx(2 / (e + 3), rel=0.01)

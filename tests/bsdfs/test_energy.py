@@ -24,6 +24,7 @@ import pytest
 import drjit as dr
 import mitsuba as mi
 
+from mi_brdfs._jit import from_numpy
 from mi_brdfs.bsdfs import energy
 from mi_brdfs.bsdfs.cook_torrance import compensation, spec as albedo_spec
 from mi_brdfs.tools import groundtruth
@@ -125,7 +126,7 @@ def test_average_is_the_integral_of_the_interpolated_table(table, params, rng):
     phi = (np.arange(n_phi) + 0.5) * 0.5 * np.pi / n_phi
     M, P = (a.ravel() for a in np.meshgrid(mu, phi, indexing="ij"))
     s = np.sqrt(1 - M * M)
-    v = mi.Vector3f(s * np.cos(P), s * np.sin(P), M)
+    v = from_numpy(mi.Vector3f, (s * np.cos(P), s * np.sin(P), M))
     weights = np.repeat(0.5 * w * 2 * mu, n_phi) / n_phi
     for _ in range(3):
         p = []

@@ -13,6 +13,7 @@ import pytest
 import drjit as dr
 import mitsuba as mi
 
+from mi_brdfs._jit import from_numpy
 from support import assert_refused, eval_and_pdf, f32, random_hemisphere, rgb, surface, vec
 
 
@@ -93,7 +94,7 @@ def test_sigma_texture(rng):
     for method in METHODS:
         bsdf = load(sigma=tex, method=method, reflectance=1.0)
         si = surface(w)
-        si.uv = mi.Point2f(rng.random(n), rng.random(n))
+        si.uv = from_numpy(mi.Point2f, rng.random((2, n)))
         v = np.array(bsdf.eval(mi.BSDFContext(), si, vec(d)))[0]
         sigma = np.array(mi.load_dict(tex).eval_1(si))
         assert sorted(set(np.round(sigma.astype(float), 5))) == [0.1, 1.3]
@@ -230,7 +231,7 @@ def hemisphere():
     u = ((np.arange(NU)[:, None] + rng.random((NU, NV))) / NU).ravel()
     v = ((np.arange(NV)[None, :] + rng.random((NU, NV))) / NV).ravel()
     s = np.sqrt(np.maximum(0.0, 1.0 - u * u))
-    return mi.Vector3f(s * np.cos(2 * np.pi * v), s * np.sin(2 * np.pi * v), u)
+    return from_numpy(mi.Vector3f, (s * np.cos(2 * np.pi * v), s * np.sin(2 * np.pi * v), u))
 
 
 def albedos(bsdf, wo, thetas=THETAS):

@@ -10,6 +10,7 @@ import pytest
 import drjit as dr
 import mitsuba as mi
 
+from mi_brdfs._jit import from_numpy
 from support import assert_refused, eval_and_pdf, random_hemisphere, rgb
 
 
@@ -238,7 +239,7 @@ def hemisphere():
     u = ((np.arange(NU)[:, None] + rng.random((NU, NV))) / NU).ravel()
     v = ((np.arange(NV)[None, :] + rng.random((NU, NV))) / NV).ravel()
     sin_t = np.sqrt(np.maximum(0.0, 1.0 - u * u))
-    return mi.Vector3f(sin_t * np.cos(2 * np.pi * v), sin_t * np.sin(2 * np.pi * v), u)
+    return from_numpy(mi.Vector3f, (sin_t * np.cos(2 * np.pi * v), sin_t * np.sin(2 * np.pi * v), u))
 
 
 def furnace_albedo(bsdf, theta_deg, azimuth_deg, wo):

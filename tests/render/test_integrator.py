@@ -4,6 +4,7 @@ import pytest
 
 import mitsuba as mi
 
+from mi_brdfs._jit import from_numpy
 import lecture
 
 RES = 40
@@ -38,7 +39,7 @@ def camera_rays(scene):
     (the geometry of the camera is not what is under test)."""
     sensor = scene.sensors()[0]
     j, i = np.meshgrid(np.arange(RES), np.arange(RES), indexing="ij")
-    pos = mi.Point2f(((i + 0.5) / RES).ravel(), ((j + 0.5) / RES).ravel())
+    pos = from_numpy(mi.Point2f, ((i + 0.5) / RES, (j + 0.5) / RES))
     ray, _ = sensor.sample_ray(0.0, 0.5, pos, mi.Point2f(0.5, 0.5))
     return np.array(ray.o).T, np.array(ray.d).T
 

@@ -24,6 +24,7 @@ import numpy as np
 
 import mi_brdfs  # noqa: F401  (LLVM set-up and variant)
 import mitsuba as mi
+from mi_brdfs._jit import from_numpy
 
 ASSETS = Path(__file__).resolve().parent / "assets"
 
@@ -58,10 +59,10 @@ def torus_ply(path: Path, n_theta: int = 8, n_phi: int = 16, r: float = 0.35) ->
     mesh = mi.Mesh("torus", len(p), len(faces), has_vertex_normals=True,
                    has_vertex_texcoords=True)
     params = mi.traverse(mesh)
-    params["vertex_positions"] = mi.Float(p.ravel().astype(np.float32))
-    params["vertex_normals"] = mi.Float(n.ravel().astype(np.float32))
-    params["vertex_texcoords"] = mi.Float(np.stack([u, v], 1).ravel().astype(np.float32))
-    params["faces"] = mi.UInt32(faces.ravel().astype(np.uint32))
+    params["vertex_positions"] = from_numpy(mi.Float, p.ravel())
+    params["vertex_normals"] = from_numpy(mi.Float, n.ravel())
+    params["vertex_texcoords"] = from_numpy(mi.Float, np.stack([u, v], 1).ravel())
+    params["faces"] = from_numpy(mi.UInt32, faces.ravel())
     params.update()
     mesh.write_ply(str(path))
 

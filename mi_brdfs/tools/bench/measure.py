@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..._jit import from_numpy
 from .. import catalog
 from ..analysis import camera
 
@@ -250,13 +251,13 @@ def bsdf_inputs(lanes: int, seed: int = 1) -> dict:
         v = rng.normal(size=(3, lanes))
         v /= np.linalg.norm(v, axis=0)
         v[2] = np.abs(v[2])
-        return mi.Vector3f(*v.astype(np.float32))
+        return from_numpy(mi.Vector3f, v)
     si = dr.zeros(mi.SurfaceInteraction3f, lanes)
     si.wi = hemisphere()
-    si.uv = mi.Point2f(*rng.random((2, lanes), dtype=np.float32))
+    si.uv = from_numpy(mi.Point2f, rng.random((2, lanes), dtype=np.float32))
     x = {"ctx": mi.BSDFContext(), "si": si, "wo": hemisphere(),
-         "sample1": mi.Float(rng.random(lanes, dtype=np.float32)),
-         "sample2": mi.Point2f(*rng.random((2, lanes), dtype=np.float32))}
+         "sample1": from_numpy(mi.Float, rng.random(lanes, dtype=np.float32)),
+         "sample2": from_numpy(mi.Point2f, rng.random((2, lanes), dtype=np.float32))}
     dr.eval(x["si"].wi, x["si"].uv, x["wo"], x["sample1"], x["sample2"])
     return x
 

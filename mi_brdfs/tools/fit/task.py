@@ -20,6 +20,8 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from ..._jit import from_numpy
+
 SLICE_ANGLES = (0.0, 30.0, 60.0, 80.0)     # viewer angles of the lobe slices (degrees)
 SLICE_POINTS = 181
 HOLD = 0.5                                  # the share of the steps at the full learning rate
@@ -70,15 +72,15 @@ def problem(target_bsdf, pairs) -> Problem:
     import mitsuba as mi
     n = len(pairs.wi)
     si = dr.zeros(mi.SurfaceInteraction3f, n)
-    si.wi = mi.Vector3f(*(pairs.wi[:, k] for k in range(3)))
+    si.wi = from_numpy(mi.Vector3f, pairs.wi.T)
     si.uv = mi.Point2f(0.5, 0.5)
-    wo = mi.Vector3f(*(pairs.wo[:, k] for k in range(3)))
+    wo = from_numpy(mi.Vector3f, pairs.wo.T)
     values = values_of(target_bsdf, si, wo)
     finite = np.isfinite(values).all(axis=1)
     values = np.where(finite[:, None], values, 0.0)
     weight = np.where(finite, pairs.weight, 0.0)
     norm = float(np.sum(weight * np.sum(values ** 2, axis=1)))
-    return Problem(si, wo, mi.Float(weight), mi.Color3f(*(values[:, c] for c in range(3))),
+    return Problem(si, wo, from_numpy(mi.Float, weight), from_numpy(mi.Color3f, values.T),
                    norm, {"weight": weight, "target": values})
 
 

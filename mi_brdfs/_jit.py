@@ -2,8 +2,9 @@
 
 Measured with Dr.Jit 1.5.0 on the LLVM backend: ``mi.Float(a)`` for a NumPy
 array ``a`` whose dtype matches does not copy ``a`` — it maps NumPy's buffer
-(``jit_var_mem_map``; a dtype that does not match is converted by NumPy first,
-and that buffer is mapped). Dr.Jit's LLVM kernels read an input array a whole
+(``jit_var_mem_map``: a later change of ``a`` shows in the Dr.Jit array; an
+array of another dtype is converted first, which we have not taken apart, so
+it goes the same way here). Dr.Jit's LLVM kernels read an input array a whole
 vector at a time, the last vector included: up to a vector's width of elements
 past the array's end. Its own allocations are padded for that; NumPy's are not.
 Where NumPy's buffer ends right before an unmapped page, the kernel dies by

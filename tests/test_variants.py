@@ -258,3 +258,41 @@ def test_render_in_scalar_rgb(tmp_path):
     import mitsuba as mi
     image = np.array(mi.Bitmap(str(out)))
     assert image.shape[:2] == (8, 8) and np.isfinite(image).all() and image.max() > 0
+
+
+def bitmap_reflectance(value: float) -> dict:
+    """A 4 x 4 RGB bitmap texture of one grey value (a new mi.Bitmap each time:
+    in spectral variants the texture upsamples the bitmap it is given in place)."""
+    import mitsuba as mi
+    return {"type": "bitmap", "bitmap": mi.Bitmap(np.full((4, 4, 3), value, dtype=np.float32))}
+
+
+@pytest.mark.parametrize("variant", ["llvm_ad_spectral", "scalar_spectral"])
+def test_spectral_bitmap_above_one(variant, capfd):
+    """In spectral variants a bitmap's values above 1 are clamped to 1 when the
+    texture is built, as for Mitsuba's diffuse: lambert reads it as diffuse
+    does, and says so once, naming itself and the parameter; a bitmap below 1
+    gets no word."""
+    import drjit as dr
+    import mitsuba as mi
+    from support import active_variant
+    with active_variant(variant):
+        si = dr.zeros(mi.SurfaceInteraction3f)
+        si.wi, si.uv = mi.Vector3f(0, 0, 1), mi.Point2f(0.5, 0.5)
+        si.wavelengths = mi.UnpolarizedSpectrum(550.0)
+        capfd.readouterr()
+        values = {}
+        for value in (3.0, 0.5):
+            for plugin in ("diffuse", "lambert"):
+                bsdf = mi.load_dict({"type": plugin, "reflectance": bitmap_reflectance(value)})
+                values[plugin, value] = np.array(bsdf.eval(mi.BSDFContext(), si,
+                                                           mi.Vector3f(0.0, 0.6, 0.8)))
+                said = "".join(capfd.readouterr())        # (Mitsuba logs to stdout)
+                if plugin == "lambert":
+                    warned = "lambert: parameter 'reflectance': 16 pixel(s)" in said
+                    assert warned == (value > 1), said
+                    assert said.count("spectral upsampling clamps") == (value > 1), said
+        for value in (3.0, 0.5):
+            np.testing.assert_allclose(values["lambert", value], values["diffuse", value],
+                                       rtol=1e-6)
+        np.testing.assert_allclose(values["lambert", 3.0], 0.8 / np.pi, rtol=1e-5)

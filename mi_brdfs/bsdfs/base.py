@@ -85,6 +85,14 @@ WEIGHT_MAX = 1e12                 # sample weights above this are float32 failur
 # Above it every value is exact; below it the derivatives of near-mirror lobes
 # (alpha 1e-4: d pdf/d alpha ~ 1/(2 pi alpha³ cos θ)) would exceed float32.
 HORIZON = 1e-20
+# The far ends of the ranges. Every accepted value is finite: a parameter with
+# no upper bound takes numbers up to the largest float32. A colour ends at
+# COLOUR_MAX (far above any reflectance; the scan-line clamp limits values above
+# 1): up to there every value, pdf, sample weight and derivative stays finite for
+# every other parameter at its own extremes (tests/bsdfs/test_battery.py), where
+# a colour near FLOAT_MAX overflows a sum of two lobes.
+FLOAT_MAX = float(np.finfo(np.float32).max)
+COLOUR_MAX = 1e6
 
 
 class ParameterError(ValueError):
@@ -110,8 +118,10 @@ class Param:
     number: an opaque Float, a float in a writable box in scalar variants; its
     traverse key is the bare name). ``role``: ``"colour"`` and ``"weight"`` scale a lobe
     (their gradients are checked at their bounds too), ``"shape"`` shapes it.
-    ``upper`` is the upper end of the range the tests probe when ``hi`` is
-    unbounded (colours: 1, a white surface). ``doc`` is its meaning, in the
+    ``upper`` is the upper end of the range the tests and the fit probe when it
+    is narrower than the valid one (colours: 1, a white surface). A colour's
+    range ends at :data:`COLOUR_MAX` unless it says otherwise; ``hi`` None
+    means every finite number (up to :data:`FLOAT_MAX`): infinity is never valid. ``doc`` is its meaning, in the
     plugin's generated parameter table (:func:`parameter_table`); an
     ``optional`` parameter is read only when given (it has no default).
     Checked when declared: a known kind and role, lo <= default <= hi
@@ -133,6 +143,11 @@ class Param:
     def __post_init__(self):
         def refuse(what: str):
             raise DeclarationError(f"Param {self.name!r}: {what}")
+        if self.role == "colour":               # see COLOUR_MAX; probed up to white
+            if self.hi is None:
+                object.__setattr__(self, "hi", COLOUR_MAX)
+            if self.upper is None:
+                object.__setattr__(self, "upper", min(1.0, self.hi))
         if self.kind not in self.KINDS:
             refuse(f"kind {self.kind!r} is unknown; valid: {', '.join(self.KINDS)}")
         if self.role not in self.ROLES:
@@ -149,7 +164,7 @@ class Param:
             refuse(f"upper {self.upper!r} is outside its range {self.valid()}")
 
     def valid(self) -> str:
-        return f"[{_fmt(self.lo, '-inf')}, {_fmt(self.hi, 'inf')}]"
+        return f"[{_fmt(self.lo, f'{-FLOAT_MAX:.7g}')}, {_fmt(self.hi, f'{FLOAT_MAX:.7g}')}]"
 
     def forms(self) -> str:
         """The property forms it accepts, with its range (for error messages)."""
@@ -158,8 +173,22 @@ class Param:
         return f"<float>, <rgb>, <spectrum> or a texture, with values in {self.valid()}"
 
     def probe_hi(self) -> float:
-        """The largest value the tests try (hi, or ``upper``, or 1)."""
-        return self.hi if self.hi is not None else (self.upper if self.upper is not None else 1.0)
+        """The largest value the tests and the fit try (``upper``, or hi, or 1)."""
+        if self.upper is not None:
+            return self.upper
+        return self.hi if self.hi is not None else 1.0
+
+    def far(self) -> tuple[float, float]:
+        """The ends of the valid range as the float32 numbers nearest to them
+        inside it: (lo, hi), an open end as the largest float32 of its sign."""
+        def inside(bound: float | None, sign: float) -> float:
+            if bound is None:
+                return sign * FLOAT_MAX
+            x = np.float32(bound)
+            if (float(x) - bound) * sign > 0:           # rounded out of the range
+                x = np.nextafter(x, np.float32(-sign * np.inf))
+            return float(x)
+        return inside(self.lo, -1.0), inside(self.hi, 1.0)
 
 
 @dataclass(frozen=True)
@@ -315,13 +344,13 @@ def parameter_error(plugin: str, name: str, value, valid: str) -> ParameterError
 
 
 def check_value(plugin: str, name: str, value: float, lo: float | None, hi: float | None,
-                valid: str | None = None) -> None:
-    """Raise ParameterError unless lo <= value <= hi (NaN is never valid)."""
+                valid: str) -> None:
+    """Raise ParameterError unless lo <= value <= hi and value is finite
+    (NaN and infinities are never valid)."""
     lo_ok = lo is None or value >= lo
     hi_ok = hi is None or value <= hi
-    if not (lo_ok and hi_ok) or (isinstance(value, float) and math.isnan(value)):
-        raise parameter_error(plugin, name, value,
-                              valid or f"[{_fmt(lo, '-inf')}, {_fmt(hi, 'inf')}]")
+    if not (lo_ok and hi_ok and math.isfinite(value)):
+        raise parameter_error(plugin, name, value, valid)
 
 
 def _coefficients(value) -> bool:
@@ -348,6 +377,22 @@ def _arrays(obj) -> list:
                 out.append(value)
         return out
     return [obj]
+
+
+# The coefficients spectral upsampling stores for white, the largest spectrum it
+# holds (Mitsuba's rgb2spec: a sigmoid of 8192, i.e. 1 at every wavelength).
+WHITE_COEFFICIENTS = (0.0, 0.0, 8192.0)
+
+
+def saturated_pixels(tex) -> int:
+    """How many pixels of a texture's spectral-upsampling coefficients encode
+    white (0 outside spectral variants, or for a texture without them)."""
+    count = 0
+    for a in _arrays(tex):
+        if _coefficients(a) and dr.is_tensor_v(a):
+            c = np.asarray(dr.detach(a)).reshape(-1, 3)
+            count += int(np.all(c == WHITE_COEFFICIENTS, axis=1).sum())
+    return count
 
 
 # Spectral upsampling (Jakob & Hanika 2019) gives a sigmoid of a polynomial in
@@ -411,14 +456,14 @@ class Reader:
     def error(self, name: str, value, valid: str) -> ParameterError:
         return parameter_error(self.plugin, name, value, valid)
 
-    def check(self, name: str, value, lo: float | None, hi: float | None) -> None:
-        check_value(self.plugin, name, value, lo, hi)
+    def check(self, p: Param, value) -> None:
+        check_value(self.plugin, p.name, value, p.lo, p.hi, p.valid())
 
     def read(self, p: Param):
         """The value of parameter ``p``: a texture, or a number for kind "float"."""
         props, name = self.props, p.name
         if name not in props:
-            self.check(name, p.default, p.lo, p.hi)
+            self.check(p, p.default)
             if p.kind == "float":
                 return number(p.default)
             return mi.load_dict({"type": "uniform", "value": p.default})
@@ -426,7 +471,7 @@ class Reader:
         if p.kind == "float":
             if kind not in NUMBERS:
                 raise self.error(name, value, p.forms())
-            self.check(name, float(value), p.lo, p.hi)
+            self.check(p, float(value))
             return number(float(value))
         if kind == T.Vector:                       # [r, g, b] from a Python dictionary
             props[name] = mi.ScalarColor3d(value)
@@ -440,12 +485,13 @@ class Reader:
         elif kind == T.Object and isinstance(value, mi.Texture):
             self.check_texture(p, value)
             self.check_evaluates(p, value)
+            self.warn_saturated(p, value)
             return value
         else:
             raise self.error(name, value if kind in (T.String, T.Bool, T.Object)
                              else Shown(f"a <{kind.name.lower()}>"), p.forms())
         for v in values:
-            self.check(name, v, p.lo, p.hi)
+            self.check(p, v)
         pairs = kind == T.Spectrum and not value.is_uniform()
         if pairs and min(values) < 0.0:
             # a distribution in spectral variants; clipped to 0 in sRGB in RGB variants
@@ -470,8 +516,23 @@ class Reader:
     def check_texture(self, p: Param, tex) -> None:
         rng = value_range(tex)
         if rng is not None:
-            self.check(p.name, rng[0], p.lo, p.hi)
-            self.check(p.name, rng[1], p.lo, p.hi)
+            self.check(p, rng[0])
+            self.check(p, rng[1])
+
+    def warn_saturated(self, p: Param, tex) -> None:
+        """In spectral variants a bitmap's pixels are upsampled to spectra in
+        [0, 1] (Jakob & Hanika 2019) when the texture is built, before a plugin
+        sees it: a value above 1 reads as 1, as for Mitsuba's ``diffuse``, and
+        nothing tells (RGB variants keep it and Mitsuba warns). What is left to
+        see is a pixel at the upsampling's ceiling, white; warn once for this
+        parameter if any pixel is, since that is where values above 1 went."""
+        count = saturated_pixels(tex)
+        if count:
+            mi.Log(mi.LogLevel.Warn,
+                   f"{self.plugin}: parameter '{p.name}': {count} pixel(s) of its bitmap read "
+                   "as white (1 in every channel): spectral upsampling clamps each pixel to "
+                   "[0, 1], so a value above 1 in the image reads as 1 (as for Mitsuba's "
+                   "diffuse); an RGB variant, or a <float> or <spectrum> above 1, keeps it")
 
     def check_evaluates(self, p: Param, tex) -> None:
         """A texture must answer the plugin's lookups (per channel, or one value

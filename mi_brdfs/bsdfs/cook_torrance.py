@@ -202,7 +202,8 @@ class CookTorrance(BRDF):
         Param("alpha", 0.3, 0.0, None, kind="scalar", role="shape", upper=1.0,
               doc="the lecture's roughness ρ (<= 1 for ``blinn``); values below "
                   "``ALPHA_MIN`` = 1e-4 (0, the perfectly smooth surface, included) are "
-                  "clamped to it, as Mitsuba and pbrt do."),
+                  "clamped to it, as Mitsuba and pbrt do, and values above ``ALPHA_MAX`` = "
+                  "1e6 to that (the lobe's limit: it reflects nothing by itself)."),
     )
 
     def read(self, reader: Reader) -> None:
@@ -227,7 +228,8 @@ class CookTorrance(BRDF):
 
     def eval_textures(self, si, active):
         return self.with_colours(si, active,
-                                 alpha=dr.fmax(self.m_alpha.eval_1(si, active), mf.ALPHA_MIN))
+                                 alpha=dr.fmin(dr.fmax(self.m_alpha.eval_1(si, active),
+                                                       mf.ALPHA_MIN), mf.ALPHA_MAX))
 
     def lobe_weights(self, inp):
         k = self.switch("k")

@@ -43,6 +43,12 @@ from . import powercos
 from .grid import Axis, Grid
 
 ALPHA_MIN = 1e-4      # smallest roughness used (alpha = 0 is clamped here, as Mitsuba does)
+# Largest roughness used: a larger alpha (up to the largest float32) is clamped
+# here. The single-scattering lobe is then at its limit, no reflection: its
+# albedo is below 3.3e-7 at every incidence up to 89.9° for every D x G
+# (tests/bsdfs/test_cook_torrance.py::test_roughness_far_end), while alpha² stays
+# far from float32's overflow.
+ALPHA_MAX = 1e6
 TINY = 1e-18          # keeps squared quantities away from 0 (TINY² is still a normal float32)
 COS_FLOOR = 1e-12     # the V-cavity 1/(4 cos θ_i) stops growing below this cosine
 BECKMANN_CUTOFF = 100.0   # tan²/rho² beyond which the Beckmann D is 0 (exp(-100) < float32 min)

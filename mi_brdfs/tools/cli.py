@@ -42,10 +42,14 @@ import time
 from importlib import metadata
 from typing import Callable, NoReturn
 
+from .. import _interrupt as interrupt
 from ..render import output, tonemap
 from . import outputs
 from .progress import Progress
 
+DESCRIPTION = ("The course lecture's BRDF models as Mitsuba 3 plugins: render scenes, compare "
+               "renders, validate the plugins, benchmark them and fit them to materials. "
+               "Each command's flags: mi-brdfs COMMAND --help.")
 UINT32_MAX = 2**32 - 1
 REPORT_MODULES = ("matplotlib", "scipy", "flip_evaluator")
 KNOWN_DEFINES = {"spp": 1, "res": 1}      # the bundled scenes' numeric defaults -> minimum
@@ -213,9 +217,21 @@ def check_render_numbers(scene, args: argparse.Namespace, defines: dict[str, str
     return spp
 
 
+def check_bundled_defines(name: str, defines: dict[str, str]) -> None:
+    """The bundled scenes use ``mode`` as the plugins' mode and as the
+    integrator's type: any other value is one line naming the two."""
+    from ..bsdfs.base import MODES
+    mode = defines.get("mode")
+    if mode is not None and mode not in MODES:
+        raise CLIError(f"-D mode={mode} is invalid for the bundled scene {name}; valid: "
+                       f"{', '.join(MODES)}")
+
+
 def cmd_render(args: argparse.Namespace) -> int:
     scene_path, bundled = resolve_scene(args.scene)
     defines = parse_defines(args.defines)
+    if bundled:
+        check_bundled_defines(args.scene, defines)
     targets = args.output or [default_output(scene_path, bundled)]
     for path in targets:
         output.check_extension(path)
@@ -229,6 +245,7 @@ def cmd_render(args: argparse.Namespace) -> int:
     import drjit as dr
     import mitsuba as mi
 
+    from ..render import memory
     from ..render.passes import render_passes, split_passes
 
     # parallel=False: scene loading with Python plugins in worker threads failed
@@ -238,6 +255,9 @@ def cmd_render(args: argparse.Namespace) -> int:
 
     log = info_logger(args.prog, args.verbose)
     chunks = split_passes(spp, args.passes)        # the passes that run (none empty)
+    problem = memory.refusal(memory.need(scene))
+    if problem:
+        raise CLIError(problem)
     width, height = scene.sensors()[0].film().crop_size()
     log(f"{scene_path}: {width}x{height}, {spp} spp in {len(chunks)} passes, "
         f"seed {args.seed}, "
@@ -371,7 +391,7 @@ def common(threads: bool = True, variant: bool = False) -> Parser:
 
 def parser() -> Parser:
     v = versions()
-    p = Parser(prog="mi-brdfs", description=__doc__.splitlines()[0])
+    p = Parser(prog="mi-brdfs", description=DESCRIPTION)
     p.add_argument("--version", action="version",
                    version=f"mi-brdfs {v['mi_brdfs']} (Mitsuba {v['mitsuba']}, "
                            f"Dr.Jit {v['drjit']})")
@@ -465,16 +485,20 @@ def parser() -> Parser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = parser().parse_args(argv)
+    prog, args = "mi-brdfs", None
     try:
-        return args.run(args)
+        args = parser().parse_args(argv)
+        prog = args.prog
+        with interrupt.watching(prog):          # Ctrl-C within a second, even in a kernel
+            return args.run(args)
     except KeyboardInterrupt:
-        print(f"{args.prog}: interrupted", file=sys.stderr)
+        interrupt.finished()
+        print(f"{prog}: interrupted", file=sys.stderr)
         return 130
     except Exception as error:       # one clear line, unless --traceback
-        if args.traceback:
+        if args is None or args.traceback:
             raise
-        print(f"{args.prog}: error: {describe(error, args.command)}", file=sys.stderr)
+        print(f"{prog}: error: {describe(error, args.command)}", file=sys.stderr)
         return 1
 
 
@@ -487,7 +511,11 @@ def describe(error: BaseException, command: str) -> str:
 
 def one_line(error: BaseException) -> str:
     """The gist of an error on one line. Mitsuba wraps a Python plugin's
-    exception with its traceback: keep only the exception's own last line."""
+    exception with its traceback: keep only the exception's own last line.
+    Dr.Jit's wrapper of a failed custom operation says only "(see above)":
+    its cause's message instead."""
+    while "(see above)" in str(error) and (error.__cause__ or error.__context__):
+        error = error.__cause__ or error.__context__
     text = str(error).strip()
     lines = [line.strip() for line in text.splitlines() if line.strip()]
     if not lines:

@@ -34,6 +34,7 @@ tests/bsdfs/test_registry.py checks that).
 from __future__ import annotations
 
 import gc
+import itertools
 import math
 
 import numpy as np
@@ -298,8 +299,10 @@ def differentiable_keys(params) -> list[str]:
             and dr.is_array_v(params[k]) and dr.is_float_v(params[k])]
 
 
-@pytest.mark.parametrize("config", from_entries(lambda name, e: each_mode(e.extremes)))
-def test_extremes(config):
+def assert_finite_everywhere(config: dict) -> None:
+    """Values, pdfs, sample weights and their gradients (every differentiable
+    parameter enabled, through traverse) are finite and non-negative at the
+    extreme directions and sample numbers."""
     bsdf = mi.load_dict(config)
     params = mi.traverse(bsdf)
     keys = differentiable_keys(params)
@@ -320,14 +323,55 @@ def test_extremes(config):
     dr.eval(*outputs.values(), bs.wo)          # one launch, then plain copies
     for what, a in outputs.items():
         x = np.array(dr.detach(a))
-        assert finite(x), f"{what} not finite"
-        assert (x >= 0).all(), f"{what} negative"
+        assert finite(x), f"{config_id(config)}: {what} not finite"
+        assert (x >= 0).all(), f"{config_id(config)}: {what} negative"
     assert finite(dr.detach(bs.wo))
     dr.backward(dr.sum(dr.sum(value)) + dr.sum(pdf) + dr.sum(dr.sum(weight)) + dr.sum(bs.pdf))
     grads = [dr.grad(params[key]) for key in keys]
     dr.eval(*grads)
     for key, grad in zip(keys, grads):
-        assert finite(grad), f"gradient of {key} not finite"
+        assert finite(grad), f"{config_id(config)}: gradient of {key} not finite"
+
+
+@pytest.mark.parametrize("config", from_entries(lambda name, e: each_mode(e.extremes)))
+def test_extremes(config):
+    assert_finite_everywhere(config)
+
+
+def option_variants(cls) -> list[dict]:
+    """Every combination of a plugin's choice options (not mode or sampling),
+    each in both modes and, for a compensable plugin, compensated."""
+    choices = [o for o in cls.OPTIONS if o.choices]
+    combos = [dict(zip((o.name for o in choices), values))
+              for values in itertools.product(*(o.choices for o in choices))]
+    modes = [{"mode": m} for m in MODES]
+    if cls.compensable:
+        modes.append({"mode": "hdr", "energy_compensation": True})
+    return [{"type": cls.name, **c, **m} for c in combos for m in modes]
+
+
+@pytest.mark.parametrize("name, p, end", [
+    pytest.param(name, p, end, id=f"{name}-{p.name}-{end}")
+    for name, cls in PLUGINS.items() for p in cls.PARAMS if not p.optional
+    for end in ("lo", "hi")])
+def test_declared_bounds(name, p, end):
+    """Every parameter at each end of the range its plugin states (an open end:
+    the largest float32), the others at their defaults, for every option
+    combination and mode: what a plugin accepts it evaluates finitely. The
+    range is the one a loaded instance checks (e.g. Blinn's alpha <= 1);
+    combinations the plugin refuses (EON's table) are left out."""
+    tried = 0
+    for config in option_variants(PLUGINS[name]):
+        try:
+            loaded = mi.load_dict(config)
+        except Exception as error:              # (Mitsuba wraps the ParameterError)
+            assert "is invalid; valid:" in error_line(error), error_line(error)
+            continue
+        declared = loaded.params.get(p.name, p)     # (a parameter read only when given)
+        lo, hi = declared.far()
+        assert_finite_everywhere({**config, p.name: lo if end == "lo" else hi})
+        tried += 1
+    assert tried
 
 
 # ----------------------------------------------------------------------------
@@ -403,7 +447,7 @@ def bad_values(p) -> list[tuple[str, object, float]]:
     if p.hi is not None:
         bad = p.hi + 0.5 * max(1.0, abs(p.hi))
         out.append(("above", bad, bad))
-        out.append(("inf", math.inf, math.inf))
+    out.append(("inf", math.inf, math.inf))          # never valid, whatever the range
     out.append(("nan", math.nan, math.nan))
     if p.kind != "float" and p.lo is not None:
         bad = p.lo - 0.5 * max(1.0, abs(p.lo))

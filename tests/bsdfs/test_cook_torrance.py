@@ -373,3 +373,31 @@ def test_blinn_roughness_is_at_most_one():
 def test_extreme_roughness_is_accepted(alpha):
     """rho = 0 and tiny values are clamped to ALPHA_MIN = 1e-4, as Mitsuba does."""
     mi.load_dict({"type": "cook_torrance", "distribution": "ggx", "alpha": alpha})
+
+
+# ----------------------------------------------------------------------------
+#  The far end of the roughness range
+# ----------------------------------------------------------------------------
+
+@pytest.mark.parametrize("distribution", ["beckmann", "ggx"])
+@pytest.mark.parametrize("geometry", GEOMETRIES)
+def test_roughness_far_end(distribution, geometry):
+    """alpha is accepted up to the largest float32 and evaluated at ALPHA_MAX
+    (1e6) beyond it: the single-scattering lobe is at its limit there (no
+    reflection: an albedo below 1e-6 up to 89.9°), the same at 1e7 and at the
+    largest float32, and infinity is refused."""
+    from mi_brdfs.bsdfs.base import FLOAT_MAX
+    from mi_brdfs.bsdfs.microfacet import ALPHA_MAX
+    config = {"type": "cook_torrance", "distribution": distribution, "geometry": geometry,
+              "k": 0.0, "f0": 1.0}
+    thetas = (0.0, 60.0, 85.0, 89.0, 89.9)
+    at_max = np.array([albedo(mi.load_dict({**config, "alpha": ALPHA_MAX}), t) for t in thetas])
+    assert (at_max >= 0).all() and at_max.max() < 1e-6, at_max
+    for beyond in (1e7, FLOAT_MAX):
+        far = np.array([albedo(mi.load_dict({**config, "alpha": beyond}), t) for t in thetas])
+        np.testing.assert_array_equal(far, at_max)
+    # the walk's albedo at the table's infinite node, for the compensated lobe
+    white = mi.load_dict({**config, "alpha": FLOAT_MAX, "energy_compensation": True})
+    np.testing.assert_allclose([albedo(white, t).mean() for t in (0.0, 60.0, 85.0)], 1.0,
+                               rtol=0.01)
+    assert_refused({**config, "alpha": math.inf}, "alpha", "inf", f"[0, {FLOAT_MAX:.7g}]")

@@ -70,7 +70,7 @@ def test_a_plugin_without_an_entry_is_named():
 @pytest.mark.parametrize("kwargs, message", [
     ({"kind": "scaler"}, "kind 'scaler' is unknown; valid: spectrum, scalar, float"),
     ({"role": "color"}, "role 'color' is unknown; valid: colour, weight, shape"),
-    ({"default": -0.5}, r"default -0.5 is outside its range \[0, inf\]"),
+    ({"default": -0.5}, r"default -0.5 is outside its range \[0, 1e\+06\]"),
     ({"default": 2.0, "hi": 1.0}, r"default 2.0 is outside its range \[0, 1\]"),
     ({"default": float("nan")}, "default nan is outside"),
     ({"default": "0.5"}, "default '0.5' is outside"),

@@ -3,7 +3,7 @@ Smith microsurface (Heitz, Hanika, d'Eon & Dachsbacher 2016, "Multiple-
 Scattering Microfacet BSDFs with the Smith Model", ACM TOG 35(4)), GGX and
 Beckmann, isotropic or anisotropic, with Schlick's Fresnel at every bounce.
 
-- :mod:`.microsurface`: the surface — projected area, Smith's Λ, masking, D,
+- :mod:`.microsurface`: the surface — projected area, Smith's Λ, D,
   visible normals (their density and sampling), the height-correlated single
   scattering; roughness one α or an :class:`Alpha` pair (α_x along s, α_y along t);
 - :mod:`.walk`: the walk — :func:`walk`, the albedo W (:func:`albedo`, any
@@ -29,14 +29,14 @@ Example::
 
 Needs SciPy (the ``reports`` extra).
 """
-from .microsurface import (DISTRIBUTIONS, Alpha, d, d_visible, fresnel, g1, lam,
-                           projected_area, sample_visible, single_scattering)
+from .microsurface import (DISTRIBUTIONS, Alpha, d, d_visible, fresnel, lam, projected_area,
+                           sample_visible, single_scattering)
 from .report import (RESIDUAL_BOUND, compensated_albedo, reference, reference_agreement,
                      report_html, report_section, residuals, slice_difference)
 from .walk import MAX_ORDER, albedo, brdf, directions, table, walk
 
 __all__ = ["DISTRIBUTIONS", "MAX_ORDER", "RESIDUAL_BOUND", "Alpha", "albedo", "brdf", "d",
-           "d_visible", "directions", "fresnel", "g1", "lam", "projected_area", "sample_visible",
+           "d_visible", "directions", "fresnel", "lam", "projected_area", "sample_visible",
            "single_scattering", "table", "walk", "compensated_albedo", "reference",
            "reference_agreement", "report_html", "report_section", "residuals",
            "slice_difference"]

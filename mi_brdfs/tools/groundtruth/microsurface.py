@@ -73,7 +73,7 @@ def dot(a, b):
 
 
 # ----------------------------------------------------------------------------
-#  Projected area, Λ, masking, D
+#  Projected area, Λ, D, visible normals
 # ----------------------------------------------------------------------------
 
 def projected_area(distribution: str, w, alpha):
@@ -98,27 +98,18 @@ def lam(distribution: str, w, alpha):
         return projected_area(distribution, -w, alpha) / w[..., 2]
 
 
-def g1(distribution: str, w, alpha):
-    """Smith's masking 1 / (1 + Λ(w)) = cos θ / A(w); 0 below the horizon."""
-    z = w[..., 2]
-    area = projected_area(distribution, w, alpha)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(z > 0, z / np.where(z > 0, area, 1.0), 0.0)
-
-
 def d(distribution: str, m, alpha):
     """The normal distribution D(m), normalised so that ∫ D(m) cos θ_m dm = 1;
     0 below the horizon."""
     ax, ay = pair(alpha)
     z = m[..., 2]
-    up = z > 0
-    zz = np.where(up, z, 1.0)
-    s2 = ((m[..., 0] / ax) ** 2 + (m[..., 1] / ay) ** 2) / (zz * zz)   # stretched slope²
-    if distribution == "ggx":
-        p = 1.0 / (np.pi * ax * ay * (1.0 + s2) ** 2)
-    else:
-        p = np.exp(-s2) / (np.pi * ax * ay)
-    return np.where(up, p / zz ** 4, 0.0)
+    q = (m[..., 0] / ax) ** 2 + (m[..., 1] / ay) ** 2      # z² times the stretched slope²
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        if distribution == "ggx":
+            value = 1.0 / (np.pi * ax * ay * (z * z + q) ** 2)
+        else:
+            value = np.exp(-q / (z * z)) / (np.pi * ax * ay * z ** 4)
+    return np.where(z > 0, np.nan_to_num(value, posinf=0.0), 0.0)
 
 
 def d_visible(distribution: str, w, m, alpha):

@@ -28,8 +28,7 @@ path's weight is multiplied by Schlick's Fresnel F(wb·m) for every F0 asked
 no light, the white furnace of the model.
 
 **BRDF.** Next-event estimation: at each facet the phase function toward the
-light wo, F(wb·h) D_wb(h) / (4 wb·h) = F(wb·h) D(h) / (4 A(wb)) with
-h = (wb + wo)/|wb + wo|, times the probability G1(wo, τ) of leaving along wo
+light wo, F(wb·h) D_wb(h) / (4 wb·h) with h = (wb + wo)/|wb + wo|, times the probability G1(wo, τ) of leaving along wo
 from there; the expectation of the sum over bounces is f·cos θ_o. The first
 bounce alone is the height-correlated single scattering (Heitz 2014):
 F D / (4 cos θ_i (1 + Λ(wi) + Λ(wo))).
@@ -51,8 +50,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .microsurface import (Alpha, check, d, dot, fresnel, lam, normalize, pair,
-                           projected_area, sample_visible)
+from .microsurface import (Alpha, check, d_visible, dot, fresnel, lam, normalize, pair,
+                           sample_visible)
 
 MAX_ORDER = 1000          # bounces after which a path still inside is dropped
 CHUNK = 4096              # paths per chunk (each chunk its own generator)
@@ -127,10 +126,11 @@ def _walk_chunk(distribution, wi, ax, ay, f0s, rng, m, wo, orders):
         if wo is not None and bounces + 1 >= first:
             light = wo[node]
             h = normalize(wb + light)
+            c = dot(wb, h)
             with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-                phase = d(distribution, h, alpha) / (4.0 * projected_area(distribution, wb, alpha))
-                leave = np.exp(-tau * lam(distribution, light, alpha))
-                estimate = weight * (phase * leave)[:, None] * fresnel(f0s, dot(wb, h)[:, None])
+                phase = d_visible(distribution, wb, h, alpha) / (4.0 * c)
+                leave = np.exp(-tau * lam(distribution, light, alpha))    # G1(wo, τ)
+                estimate = weight * (phase * leave)[:, None] * fresnel(f0s, c[:, None])
             seen[cell] += np.where(light[:, 2:] > 0, np.nan_to_num(estimate), 0.0)
         # ---- scattering: a visible normal, the mirror direction, Fresnel
         m_normal = sample_visible(distribution, wb, alpha, u[1], u[2])

@@ -210,7 +210,7 @@ def _slopes_beckmann(v, u1, u2):
     cphi = np.where(along, v[..., 0] / np.where(along, sin_t, 1.0), 1.0)
     sphi = np.where(along, v[..., 1] / np.where(along, sin_t, 1.0), 0.0)
     sx = visible_slope_beckmann(v[..., 2], sin_t, u1)
-    sy = erfinv(2.0 * u2 - 1.0)                             # across: the plain Gaussian
+    sy = erfinv(np.maximum(2.0 * u2 - 1.0, -1.0 + 1e-15))   # across: the plain Gaussian
     px, py = cphi * sx - sphi * sy, sphi * sx + cphi * sy   # to the viewer's azimuth
     return np.stack([-px, -py, np.ones_like(px)], axis=-1)
 

@@ -99,7 +99,7 @@ def test_projected_area_and_lambda(distribution, alpha):
     """A(w) = ∫ max(0, w·m) D(m) dm by quadrature, for w above and below the
     horizon at several azimuths; Λ(w) against Heitz 2014 above the horizon and
     -1 - Λ(-w) below it."""
-    m, dm = hemisphere_cells(600)
+    m, dm = hemisphere_cells(300)
     dm_d = ndf(distribution, m, alpha) * dm
     w = np.array([direction(t, p) for t in (0, 30, 70, 89, 95, 130, 170) for p in (0, 40, 90)])
     integral = np.maximum(w @ m.T, 0.0) @ dm_d

@@ -1,7 +1,7 @@
 """Energy compensation (mi_brdfs/bsdfs/energy.py) against its truths: the
 shipped tables against closed forms, a fresh quadrature and a fresh random
 walk; the compensated albedo of cook_torrance against the random walk of
-Heitz et al. 2016 (mi_brdfs/tools/groundtruth.py); colours that scale linearly;
+Heitz et al. 2016 (mi_brdfs/tools/groundtruth/); colours that scale linearly;
 roughness derivatives against finite differences of the smooth truth. (The
 white furnace at 1 of every compensated model, m_S = 0.5 reflecting 0.5,
 reciprocity, χ², frozen evaluation and gradients through the tables are in

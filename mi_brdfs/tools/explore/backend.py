@@ -163,6 +163,13 @@ def integrator(mode: str) -> dict:
     return {"type": "scanline"} if mode == "scanline" else {"type": "path", "max_depth": 3}
 
 
+def light_scale(mode: str) -> float:
+    """The preview's lights in ``mode``: the lecture's scan-line formulas have
+    no 1/π (m_D·clamp(d·n) for Lambert), so their lights are divided by π to
+    show a scan-line material as bright as its hdr counterpart."""
+    return 1.0 / math.pi if mode == "scanline" else 1.0
+
+
 def to_srgb8(image: np.ndarray, mode: str) -> np.ndarray:
     """Linear RGB -> 8-bit sRGB, tone-mapped as the preview does in ``mode``."""
     from ...render.tonemap import to_srgb8 as convert

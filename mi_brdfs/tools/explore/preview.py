@@ -44,10 +44,10 @@ def environment() -> np.ndarray:
     return radiance.astype(np.float32)
 
 
-def scene_dict(bsdf, res: int, integrator: dict, env) -> dict:
+def scene_dict(bsdf, res: int, integrator: dict, env, light: float = 1.0) -> dict:
     """The preview scene with ``bsdf`` (a loaded BSDF, shared with whoever
     else holds it) at ``res`` × ``res`` pixels; ``env`` an ``mi.Bitmap`` of
-    :func:`environment`."""
+    :func:`environment`; ``light`` scales every emitter."""
     import mitsuba as mi
     look = mi.ScalarTransform4f().look_at(origin=CAMERA["origin"], target=CAMERA["target"],
                                           up=[0.0, 1.0, 0.0])
@@ -59,7 +59,7 @@ def scene_dict(bsdf, res: int, integrator: dict, env) -> dict:
                             "rfilter": {"type": "box"}},
                    "sampler": {"type": "independent"}},
         "sphere": {"type": "sphere", "bsdf": bsdf},
-        "environment": {"type": "envmap", "bitmap": env},
+        "environment": {"type": "envmap", "bitmap": env, "scale": light},
         "key": {"type": "directional", "direction": list(KEY_DIRECTION),
-                "irradiance": {"type": "rgb", "value": [KEY_IRRADIANCE] * 3}},
+                "irradiance": {"type": "rgb", "value": [KEY_IRRADIANCE * light] * 3}},
     }

@@ -184,7 +184,7 @@ def make_app(explorer, jit, walker) -> web.Application:
 
     app.on_shutdown.append(close_sockets)
     app.router.add_get("/", page)
-    app.router.add_get("/favicon.ico", lambda request: _no_content())
+    app.router.add_get("/favicon.ico", favicon)
     app.router.add_get("/static/{name}", static)
     app.router.add_get("/api/models", models)
     app.router.add_post("/api/{op}", api)
@@ -192,8 +192,8 @@ def make_app(explorer, jit, walker) -> web.Application:
     return app
 
 
-async def _no_content() -> web.Response:
-    return web.Response(status=204)
+async def favicon(request) -> web.Response:
+    return web.Response(status=204)        # none: a quiet browser console
 
 
 def _settle(future: asyncio.Future, result, error) -> None:

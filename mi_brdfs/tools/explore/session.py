@@ -90,8 +90,8 @@ class Entry:
     def scene(self, res: int, mode: str, env):
         if res not in self.scenes:
             import mitsuba as mi
-            self.scenes[res] = mi.load_dict(preview.scene_dict(self.bsdf, res,
-                                                               backend.integrator(mode), env))
+            self.scenes[res] = mi.load_dict(preview.scene_dict(
+                self.bsdf, res, backend.integrator(mode), env, backend.light_scale(mode)))
         return self.scenes[res]
 
 

@@ -204,6 +204,7 @@ function update(column) {
   requestAnimationFrame(() => {
     column.pending = false;
     const material = column.material;
+    column.el.querySelector(".preview").dataset.spp = "0";      // until the new render's first pass
     send(column, "plots", {material, theta_i: theta()});
     send(column, "render", {material, res: +document.getElementById("res").value});
     send(column, "walk", {material});

@@ -71,6 +71,7 @@ def command(args) -> int:
 async def serve(host: str, port: int, browser: bool, prog: str = "mi-brdfs explore") -> int:
     """Serve until SIGINT or SIGTERM; 0 after a clean stop."""
     import asyncio
+    import os
     import signal
 
     from aiohttp import web
@@ -90,8 +91,8 @@ async def serve(host: str, port: int, browser: bool, prog: str = "mi-brdfs explo
             await site.start()
         except OSError as error:
             await runner.cleanup()
-            raise RuntimeError(f"cannot listen on {host}:{port}: "
-                               f"{error.strerror or error}") from None
+            reason = os.strerror(error.errno).lower() if error.errno else str(error)
+            raise RuntimeError(f"cannot listen on {host}:{port}: {reason}") from None
         bound = runner.addresses[0][1]
         shown = f"[{host}]" if ":" in host else host
         url = f"http://{shown}:{bound}/"

@@ -177,6 +177,19 @@ def test_lambert_views_are_the_lecture_formula(ex):
                                          x.shape[1], axis=1), atol=3e-4)
 
 
+def test_a_sharp_phong_lobe_reflects_cos_theta(ex):
+    """hdr Phong's lobe (γ+2)/2π cos^γ(α) times cos θ_o integrates to cos θ_i
+    over the sphere (the cos θ_o = cos θ_r cos α + sin θ_r sin α cos β of the
+    lobe's frame leaves cos θ_r · 2π/(γ+2)): at γ = 1000 its lobe stays above
+    the horizon up to 70°, and the albedo curve must be cos θ_i there."""
+    out = ex.plots({"type": "phong", "exponent": 1000.0, "diffuse_reflectance": 0.0,
+                    "specular_reflectance": 1.0}, 0.0)
+    e = np.array(out["albedo"]["curves"][0]["E"])
+    angles = np.array(ALBEDO_ANGLES)
+    below = angles <= 70
+    np.testing.assert_allclose(e[below], np.cos(np.radians(angles[below])), rtol=5e-3)
+
+
 def test_hemispherical_albedo_of_known_curves():
     """2∫E(μ)μ dμ: 1 for E = 1, 2/3 for E = cos θ (independent closed forms)."""
     angles = np.radians(ALBEDO_ANGLES)

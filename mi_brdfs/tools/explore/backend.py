@@ -9,7 +9,9 @@ takes:
   ``PARAMS``, ``options()`` and ``compensable``), as JSON;
 - the loader's one-line error (``bsdfs.base.ParameterError``), through
   :func:`load`;
-- the lobe and albedo evaluations of :mod:`mi_brdfs.tools.analysis`;
+- the lobe evaluations of :mod:`mi_brdfs.tools.analysis` (its albedo
+  quadrature launches a kernel per angle, too slow for a slider:
+  :func:`.session.directional_albedo` does all angles in one);
 - the random walk's albedo (:func:`mi_brdfs.tools.groundtruth.albedo`, Heitz
   et al. 2016) and how ``cook_torrance``'s parameters map onto it;
 - the integrators of the two modes and the tone mapping of
@@ -18,6 +20,7 @@ takes:
 """
 from __future__ import annotations
 
+import contextlib
 import math
 
 import numpy as np
@@ -72,26 +75,33 @@ def course_models() -> list[dict]:
 # ----------------------------------------------------------------------------
 
 class MaterialError(ValueError):
-    """A material the loader refused, with its one-line message."""
+    """A material the plugin refused, with its one-line message."""
 
 
-def load(props: dict):
-    """``mi.load_dict(props)``; the loader's one-line message as MaterialError.
+@contextlib.contextmanager
+def checked():
+    """The plugin's own checks, at load time or at ``params.update()``, as
+    MaterialError with the plugin's one-line message.
 
     Mitsuba wraps an exception raised in a Python plugin's constructor in a
     RuntimeError that carries the traceback: the plugin's own message is its
     last line, after the exception's class name."""
-    import mitsuba as mi
-
     from ...bsdfs.base import ParameterError
     try:
-        return mi.load_dict(props)
+        yield
     except ParameterError as error:
         raise MaterialError(str(error)) from None
     except RuntimeError as error:
         tag = ParameterError.__name__ + ": "
         last = str(error).strip().splitlines()[-1].strip()
         raise MaterialError(last.split(tag, 1)[1] if tag in last else message(error)) from None
+
+
+def load(props: dict):
+    """``mi.load_dict(props)``, checked (:func:`checked`)."""
+    import mitsuba as mi
+    with checked():
+        return mi.load_dict(props)
 
 
 def message(error: BaseException) -> str:
@@ -101,7 +111,7 @@ def message(error: BaseException) -> str:
 
 
 # ----------------------------------------------------------------------------
-#  Lobes and albedo (mi_brdfs.tools.analysis)
+#  Lobes (mi_brdfs.tools.analysis)
 # ----------------------------------------------------------------------------
 
 def lobe_in_plane(bsdf, theta_i: float, n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -118,13 +128,6 @@ def lobe_over_hemisphere(bsdf, theta_i: float, n: int):
     """θ_o, φ_o (radians, (n, 4n) grids) and eval's channel mean there."""
     from ..analysis import hemisphere
     return hemisphere(bsdf, theta_i, n)
-
-
-def directional_albedo(bsdf, angles, strata: tuple[int, int]) -> np.ndarray:
-    """E(θ_i) at each angle (degrees), the largest of the three channels, by
-    stratified quadrature over the hemisphere (independent of the sampler)."""
-    from ..analysis import directional_albedo as albedo
-    return albedo(bsdf, angles, strata=strata)
 
 
 # ----------------------------------------------------------------------------

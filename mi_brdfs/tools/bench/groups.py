@@ -208,8 +208,8 @@ def explore(s: Settings, refs: References) -> list[dict]:
     """mi-brdfs explore as its page sees it (a server process, one websocket
     client; tools/explore/latency.py): start-up, a configuration's first
     128² image, slider -> plot data (the page's 100 ms budget), re-render to
-    the first pass and to 256 spp after a change; medians and maxima over
-    the slider moves."""
+    the first pass and to 256 spp after a change, and a fit; medians and
+    maxima over the slider moves."""
     from ..explore import latency
     return latency.measure(moves=20 if s is FULL else 3)
 

@@ -10,7 +10,8 @@ websocket client that does what the page does, one request at a time:
 - ``slider -> plots``: a new parameter value to the lobe, 3-D lobe and albedo
   data, received (the page's 100 ms budget);
 - ``re-render``: a new parameter value to its first preview pass;
-- ``256 spp``: a new value to the last pass of its progressive render.
+- ``256 spp``: a new value to the last pass of its progressive render;
+- ``fit``: the "Fit left to right" button's answer.
 """
 from __future__ import annotations
 
@@ -86,6 +87,9 @@ async def _measure(url: str, moves: int) -> list[dict]:
                 rows += [_row("slider -> plots", label, plots),
                          _row("re-render", label, renders),
                          _row("256 spp", label, finals)]
+            (left, model), (right, target) = CONFIGS[0], CONFIGS[-1]
+            rows.append(_row("fit", f"{left} to {right}", [
+                await client.ask("fit", first, left=model, right={**target, "alpha": 0.3})]))
     return rows
 
 

@@ -110,6 +110,8 @@ TOO_BIG = json.dumps({"material": {"type": "lambert"}, "pad": "x" * 300_000}).en
     ("POST", "/api/plots", TOO_BIG, None, 413, ""),
     ("POST", "/api/plots", {"material": {"type": "phong"}}, {"Origin": "http://example.org"},
      403, "requests from another origin are refused"),
+    ("GET", "/api/models", None, {"Host": "rebound.example:8765"}, 403,
+     "this server answers to 127.0.0.1 or localhost, not rebound.example:8765"),
     ("GET", "/api/plots", None, None, 405, ""),
     ("GET", "/nonesuch", None, None, 404, ""),
 ])

@@ -83,7 +83,7 @@ async def serve(host: str, port: int, browser: bool, prog: str = "mi-brdfs explo
     jit, walker = Worker("explore-jit"), Worker("explore-walk")
     try:
         explorer = jit.call(Explorer)
-        runner = web.AppRunner(make_app(explorer, jit, walker), shutdown_timeout=2.0,
+        runner = web.AppRunner(make_app(explorer, jit, walker, host), shutdown_timeout=2.0,
                                access_log=None)
         await runner.setup()
         site = web.TCPSite(runner, host, port)

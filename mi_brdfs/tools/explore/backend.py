@@ -186,12 +186,13 @@ def to_srgb8(image: np.ndarray, mode: str) -> np.ndarray:
 FIT_STEPS = 160      # Adam steps per start (the fit's QUICK settings have 120, FULL 250)
 
 
-def fit(model: dict, target: dict, options: tuple[str, ...]) -> tuple[dict, float]:
+def fit(model: dict, target: dict, options: tuple[str, ...]) -> tuple[dict, float | None]:
     """Fit the course model ``model`` (complete flat material; ``options``: its
     option names, kept fixed) to the BSDF ``target`` (a ``mi.load_dict``
     dictionary) with the project's fit (its metric's direction pairs, Adam
     from several starts); returns (the fitted values, flat, colours as
-    lists; the relative BRDF error: 0 identical, 1 as far as black)."""
+    lists; the relative BRDF error: 0 identical, 1 as far as black; None
+    if it is not finite)."""
     from ..fit import metric, models, task
     settings = task.QUICK.replace(render=False, steps=FIT_STEPS)
     pairs = metric.pairs(settings.metric, settings.viewers, settings.uniform, settings.lobe)
@@ -204,4 +205,4 @@ def fit(model: dict, target: dict, options: tuple[str, ...]) -> tuple[dict, floa
         raise MaterialError("fit: the target reflects no light at the metric's directions")
     result = task.fit_model(chosen, problem, settings)
     error = float(result["brdf_error"])
-    return dict(result["parameters"]), (error if math.isfinite(error) else float("nan"))
+    return dict(result["parameters"]), (error if math.isfinite(error) else None)

@@ -21,7 +21,8 @@ Routes (documented for users on the site's explore page):
 Every error is JSON, ``{"error": "one line"}``, with status 400 for a bad
 request, 403, 404, 405 or 413 as HTTP has them, 500 for a failure of ours;
 never a traceback. Requests from another origin (a page of another site in
-the user's browser) are refused.
+the user's browser) are refused, and so, on loopback, are requests that name
+another host (DNS rebinding).
 """
 from __future__ import annotations
 
@@ -109,15 +110,31 @@ class Operations:
 #  HTTP
 # ----------------------------------------------------------------------------
 
+LOOPBACK_NAMES = {"127.0.0.1", "localhost", "::1"}
+
+
 def same_origin(request: web.Request) -> bool:
     """No Origin header (a script), or the server's own."""
     origin = request.headers.get("Origin")
     return origin is None or urlsplit(origin).netloc == request.host
 
 
+def trusted_host(request: web.Request, names: set[str] | None) -> bool:
+    """A server on loopback answers only to loopback's names: a page of
+    another site whose name was made to point at 127.0.0.1 (DNS rebinding)
+    is refused. ``names`` None: any name (the user chose another address)."""
+    if names is None:
+        return True
+    host = urlsplit("//" + request.host).hostname if request.host else None
+    return host in names
+
+
 @web.middleware
 async def json_errors(request: web.Request, handler):
     try:
+        if not trusted_host(request, request.app["hosts"]):
+            raise web.HTTPForbidden(reason=f"this server answers to 127.0.0.1 or localhost, "
+                                           f"not {request.host}")
         return await handler(request)
     except web.HTTPException as error:
         if error.status < 400:
@@ -129,10 +146,13 @@ async def json_errors(request: web.Request, handler):
         return error_response(500, message(error))
 
 
-def make_app(explorer, jit, walker) -> web.Application:
+def make_app(explorer, jit, walker, host: str = "127.0.0.1") -> web.Application:
+    """The application; ``host``: the address it listens on (on loopback it
+    answers to loopback's names only)."""
     ops = Operations(explorer, jit, walker)
     app = web.Application(middlewares=[json_errors], client_max_size=MAX_BODY)
     app["sockets"] = set()
+    app["hosts"] = LOOPBACK_NAMES | {host} if host in LOOPBACK_NAMES else None
     files = {name: os.path.join(STATIC, name) for name in FILES}
     files["plotly.min.js"] = plotly_js()
     counter = itertools.count()
@@ -265,6 +285,11 @@ class Client:
             if self.ws.closed:
                 return
             try:
-                await self.ws.send_str(dumps(data))
+                text = dumps(data)
+            except ValueError:                  # NaN or infinity: not JSON
+                text = dumps({k: data.get(k) for k in ("op", "id", "side")}
+                             | {"error": "the result holds a number that is not finite"})
+            try:
+                await self.ws.send_str(text)
             except (ConnectionError, RuntimeError):
                 return

@@ -206,10 +206,10 @@ class Explorer:
         """The lobe in the plane of incidence (per channel), over the
         hemisphere (channel mean), the directional albedo of the material and
         of its white configurations (:func:`directional_albedo`), and the
-        white furnace's value: the
-        hemispherical albedo 2∫E(μ)μ dμ of the white configuration the
-        material is (its own compensation setting)."""
-        if not (isinstance(theta_i, (int, float)) and 0.0 <= theta_i <= 89.0):
+        white furnace's value: the hemispherical albedo 2∫E(μ)μ dμ of the
+        white configuration the material is (its own compensation setting)."""
+        if not (isinstance(theta_i, (int, float)) and not isinstance(theta_i, bool)
+                and 0.0 <= theta_i <= 89.0):
             raise RequestError(f"theta_i = {theta_i!r} is invalid; valid: a number in [0, 89]")
         material, entry = self.prepare(raw)
         theta, rgb = backend.lobe_in_plane(entry.bsdf, theta_i, LOBE_POINTS)
@@ -222,7 +222,8 @@ class Explorer:
             e = directional_albedo(twin.bsdf, ALBEDO_ANGLES, ALBEDO_SIDE)
             curves.append({"label": label, "E": rounded(e)})
             if white.get(backend.ENERGY_COMPENSATION) == material.get(backend.ENERGY_COMPENSATION):
-                furnace = {"label": label, **hemispherical(e)}
+                value = hemispherical(e)
+                furnace = value and {"label": label, **value}
         return {"material": material, "theta_i": theta_i,
                 "lobe": {"theta": rounded(theta), "rgb": rounded(rgb.T)},
                 "lobe3d": {"x": rounded(v * np.sin(t) * np.cos(p)),
@@ -296,10 +297,12 @@ def json_key(value):
     return tuple(value) if isinstance(value, list) else value
 
 
-def hemispherical(e: np.ndarray) -> dict:
+def hemispherical(e: np.ndarray) -> dict | None:
     """The hemispherical albedo 2∫E(μ)μ dμ from E at ALBEDO_ANGLES (trapezoid
     rule in μ, E held constant from the last angle to the horizon), and E's
-    largest value and its angle."""
+    largest value and its angle; None unless E is finite."""
+    if not np.isfinite(e).all():
+        return None
     mu = np.cos(np.radians(ALBEDO_ANGLES))[::-1]
     f = (2.0 * e * np.cos(np.radians(ALBEDO_ANGLES)))[::-1]
     value = float(np.trapezoid(f, mu) + f[0] * mu[0] / 2.0)

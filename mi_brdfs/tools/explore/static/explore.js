@@ -289,7 +289,8 @@ async function showCopied(column, msg) {
 }
 
 function fitted(msg) {
-  status(`fitted: BRDF error ${msg.brdf_error.toFixed(3)} (0 identical, 1 as far as black)`);
+  const error = msg.brdf_error === null ? "not finite" : msg.brdf_error.toFixed(3);
+  status(`fitted: BRDF error ${error} (0 identical, 1 as far as black)`);
   setMaterial(page.columns.left, msg.material);
 }
 

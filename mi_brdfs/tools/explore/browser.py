@@ -124,6 +124,9 @@ def screenshot(target, path: str) -> None:
     folder = os.path.dirname(os.path.abspath(path))
     fd, tmp = tempfile.mkstemp(suffix=".png", dir=folder)
     os.close(fd)
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(tmp, 0o666 & ~umask)                 # as a file written plainly
     try:
         target.screenshot(path=tmp)
         os.replace(tmp, path)

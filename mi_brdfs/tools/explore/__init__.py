@@ -39,10 +39,10 @@ LOOPBACK = ("127.0.0.1", "localhost", "::1")
 
 def add_parser(sub, common) -> None:
     """The ``explore`` subcommand of ``mi-brdfs`` (``common``: the shared flags)."""
-    from ..cli import integer
+    from .backend import port_number
     e = sub.add_parser("explore", parents=[common()],
                        help="explore the models in the browser: lobes, albedo, live renders")
-    e.add_argument("--port", type=integer(0, 65535), default=DEFAULT_PORT,
+    e.add_argument("--port", type=port_number(), default=DEFAULT_PORT,
                    help=f"the port (default {DEFAULT_PORT}; 0: any free port)")
     e.add_argument("--host", default="127.0.0.1",
                    help="the address to listen on (default 127.0.0.1, this machine only)")
@@ -51,15 +51,14 @@ def add_parser(sub, common) -> None:
 
 
 def command(args) -> int:
-    from ..cli import set_threads, set_verbosity
+    from .backend import configure
     try:
         import aiohttp  # noqa: F401
         import plotly  # noqa: F401
     except ModuleNotFoundError as error:
         raise RuntimeError(f"{error.name} is not installed; mi-brdfs explore needs it: "
                            "pip install 'mi_brdfs[explore]'") from None
-    set_threads(args.threads)
-    set_verbosity(args.verbose)
+    configure(args.threads, args.verbose)
     if args.host not in LOOPBACK:
         print(f"{args.prog}: warning: listening on {args.host}: anyone who can reach this "
               "machine on that address can use the explorer (it has no authentication)",

@@ -16,7 +16,9 @@ takes:
   et al. 2016) and how ``cook_torrance``'s parameters map onto it;
 - the integrators of the two modes and the tone mapping of
   :mod:`mi_brdfs.render.tonemap`;
-- the fit of :mod:`mi_brdfs.tools.fit` (one model to one target).
+- the fit of :mod:`mi_brdfs.tools.fit` (one model to one target);
+- the command line's conventions (:mod:`mi_brdfs.tools.cli`: checked numbers,
+  threads and log level, errors on one line).
 """
 from __future__ import annotations
 
@@ -28,6 +30,19 @@ import numpy as np
 ENERGY_COMPENSATION = "energy_compensation"     # the base's option name
 MODES = ("scanline", "hdr")
 TONEMAP = {"hdr": "aces", "scanline": "clamp"}   # the preview's operator per mode
+
+
+def port_number():
+    """The argparse type of ``--port``: the command line's checked integer."""
+    from ..cli import integer
+    return integer(0, 65535)
+
+
+def configure(threads: int | None, verbose: int) -> None:
+    """Dr.Jit's thread count and the log level, as the other commands set them."""
+    from ..cli import set_threads, set_verbosity
+    set_threads(threads)
+    set_verbosity(verbose)
 
 
 def setup() -> str:

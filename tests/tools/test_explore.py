@@ -249,6 +249,27 @@ def test_progressive_frames_refine_to_the_spp_asked(ex):
         ex.frames({"type": "phong"}, 100, 4)
 
 
+def sphere_centre(ex, material: dict) -> np.ndarray:
+    """The mean linear RGB of the preview's central quarter (all sphere)."""
+    _, _, scene = ex.preview(material, 128)
+    image = np.array(mi.render(scene, spp=64, seed=3))[32:96, 32:96, :3]
+    return image.mean(axis=(0, 1))
+
+
+def test_scanline_previews_are_as_bright_as_hdr_ones(ex):
+    """The lecture's scan-line Lambert m_D·cos has no 1/π: its preview's
+    lights are divided by π, so the sphere shows the radiance the hdr
+    Lambert m_D/π·cos gives (direct light on a convex object: the two
+    integrators estimate the same integral). A built-in keeps its lights."""
+    hdr = sphere_centre(ex, {"type": "lambert", "reflectance": [0.3, 0.2, 0.1]})
+    scanline = sphere_centre(ex, {"type": "lambert", "reflectance": [0.3, 0.2, 0.1],
+                                  "mode": "scanline"})
+    np.testing.assert_allclose(scanline, hdr, rtol=0.03)
+    builtin = sphere_centre(ex, {"type": "diffuse", "reflectance": [0.3, 0.2, 0.1],
+                                 "mode": "scanline"})
+    np.testing.assert_allclose(builtin, hdr, rtol=0.03)
+
+
 def test_fit_recovers_a_model_fitted_to_itself(ex):
     """Fitting cook_torrance to another cook_torrance of the same options
     finds its roughness (an exact solution exists; k, m_D, m_S and F0 trade

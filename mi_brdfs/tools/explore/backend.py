@@ -182,9 +182,10 @@ def integrator(mode: str) -> dict:
 
 
 def light_scale(mode: str) -> float:
-    """The preview's lights in ``mode``: the lecture's scan-line formulas have
-    no 1/π (m_D·clamp(d·n) for Lambert), so their lights are divided by π to
-    show a scan-line material as bright as its hdr counterpart."""
+    """The preview's lights for a course plugin in ``mode``: the lecture's
+    scan-line formulas have no 1/π (m_D·clamp(d·n) for Lambert), so their
+    lights are divided by π to show a scan-line material as bright as its hdr
+    counterpart (Mitsuba's built-ins keep 1 in either mode)."""
     return 1.0 / math.pi if mode == "scanline" else 1.0
 
 

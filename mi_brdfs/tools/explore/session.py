@@ -128,11 +128,11 @@ class Entry:
         with backend.checked():
             self.params.update()
 
-    def scene(self, res: int, mode: str, env):
+    def scene(self, res: int, mode: str, env, light: float):
         if res not in self.scenes:
             import mitsuba as mi
             self.scenes[res] = mi.load_dict(preview.scene_dict(
-                self.bsdf, res, backend.integrator(mode), env, backend.light_scale(mode)))
+                self.bsdf, res, backend.integrator(mode), env, light))
         return self.scenes[res]
 
 
@@ -242,9 +242,15 @@ class Explorer:
                                + ", ".join(map(str, RESOLUTIONS)))
         if not (isinstance(spp, int) and not isinstance(spp, bool) and 1 <= spp <= MAX_SPP):
             raise RequestError(f"spp = {spp!r} is invalid; valid: an integer in [1, {MAX_SPP}]")
-        material, entry = self.prepare(raw)
-        scene = entry.scene(res, material["mode"], self.env)
+        material, entry, scene = self.preview(raw, res)
         return self._passes(material, entry, scene, res, spp)
+
+    def preview(self, raw, res: int) -> tuple[dict, Entry, object]:
+        """The material, its configuration and its preview scene at ``res``."""
+        material, entry = self.prepare(raw)
+        course = self.models[material["type"]]["source"] == "mi_brdfs"
+        light = backend.light_scale(material["mode"]) if course else 1.0   # built-ins: physical
+        return material, entry, entry.scene(res, material["mode"], self.env, light)
 
     def _passes(self, material, entry, scene, res, spp):
         import mitsuba as mi

@@ -479,6 +479,8 @@ def parser() -> Parser:
                    help="run on this Dask distributed scheduler (e.g. tcp://host:8786) "
                         "instead of local processes")
     f.set_defaults(run=cmd_fit)
+    from .explore import add_parser as add_explore      # mi-brdfs explore (tools/explore)
+    add_explore(sub, common)
     for name, command in sub.choices.items():
         command.set_defaults(prog=command.prog)
     return p

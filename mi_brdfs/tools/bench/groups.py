@@ -204,6 +204,21 @@ def energy(s: Settings, refs: References) -> list[dict]:
 #  In processes of their own (workers.py)
 # ----------------------------------------------------------------------------
 
+def explore(s: Settings, refs: References) -> list[dict]:
+    """mi-brdfs explore as its page sees it (a server process, one websocket
+    client; tools/explore/latency.py): start-up, a configuration's first
+    128² image, slider -> plot data (the page's 100 ms budget), re-render to
+    the first pass and to 256 spp after a change, and a fit; medians and
+    maxima over the slider moves."""
+    from ..explore import latency
+    return latency.measure(moves=20 if s is FULL else 3)
+
+
+def explore_finding(rows: list[dict]) -> str:
+    from ..explore import latency
+    return latency.finding(rows)
+
+
 MATERIALS_COLUMNS = {     # column: the worker's figure
     "first_s": "first_wall_s", "first_tracing_s": "first_tracing_s",
     "first_codegen_s": "first_codegen_s", "warm_s": "wall_s", "tracing_s": "tracing_s",
@@ -335,5 +350,6 @@ GROUPS: dict[str, Group] = {g.name: g for g in [
     Group("frozen", frozen, report.frozen, plots.frozen),
     Group("kernels", kernels, report.kernels, plots.kernels),
     Group("tracing", tracing, report.tracing, plots.tracing),
+    Group("explore", explore, explore_finding),
     Group("trade", trade, report.trade, writes=True),
 ]}

@@ -1,0 +1,121 @@
+"""Every plugin inside each of Mitsuba's adapters (``twosided``, ``mask``,
+``bumpmap``, ``normalmap``, ``blendbsdf``), rendered inside ``dr.freeze``:
+the frozen render equals the plain render, replays (no new recording) when
+values change between calls, and replays on another instance of the scene.
+
+The scene is :func:`support.tiles_scene` with a tile per plugin, each inside
+the adapter (textured where the adapter takes a texture: the bitmaps of
+tests/scenes/assets), lit by point lights and a constant environment, and
+rendered by the path tracer: the adapters' eval, pdf and sample of every
+plugin are traced into one frozen kernel (virtual calls among the tiles).
+"""
+from __future__ import annotations
+
+import gc
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import drjit as dr
+import mitsuba as mi
+
+from mi_brdfs.bsdfs import BY_NAME
+from mi_brdfs.render.frozen import warm_up
+from support import (blend, floats, moved, neighbour, plugin_configs, tile, tiles_scene,
+                     twosided)
+
+ASSETS = Path(__file__).resolve().parents[1] / "scenes" / "assets"
+SPP = 2
+
+
+def bitmap(name: str, raw: bool = False) -> dict:
+    return {"type": "bitmap", "filename": str(ASSETS / name), "raw": raw}
+
+
+ADAPTERS = {
+    # turned over: the back side is the one rendered
+    "twosided": lambda config: twosided(moved(config), config),
+    "mask": lambda config: {"type": "mask", "opacity": bitmap("mask.png"), "bsdf": config},
+    "bumpmap": lambda config: {"type": "bumpmap", "height": bitmap("height.png", raw=True),
+                               "bsdf": config},
+    "normalmap": lambda config: {"type": "normalmap", "normalmap": bitmap("normals.png", raw=True),
+                                 "bsdf": config},
+    "blendbsdf": lambda config: blend(config, plugin_configs()[neighbour(config["type"])],
+                                      weight=bitmap("weight.png")),
+}
+
+
+@pytest.fixture(autouse=True, scope="module")
+def no_loose_bsdfs():
+    """A frozen render traces every BSDF alive in the process: collect what
+    earlier modules left for the garbage collector (as tests/render/test_passes.py)."""
+    gc.collect()
+
+
+def scene_of(adapter: str) -> mi.Scene:
+    wrap, configs = ADAPTERS[adapter], plugin_configs()
+    scene = mi.load_dict(tiles_scene({name: wrap(c) for name, c in configs.items()},
+                                     {"type": "path", "max_depth": 3}, spp=SPP, env=0.3,
+                                     backs=adapter == "twosided"),
+                         optimize=False)        # (optimised, equal BSDFs would be merged)
+    warm_up(scene)            # what a first render sets up, traced before any recording
+    return scene
+
+
+def render(scene: mi.Scene) -> mi.TensorXf:
+    return mi.render(scene, spp=SPP, seed=1)
+
+
+def assert_lit_tiles(image: np.ndarray) -> None:
+    for i, name in enumerate(BY_NAME):
+        assert tile(image, i).max() > 0.01, f"{name}: a black tile"
+
+
+def recolour(scene: mi.Scene, factor: float) -> None:
+    """Every colour of every BSDF of the scene (both sides, both blended BSDFs)
+    times ``factor``, written as arrays in memory."""
+    params = mi.traverse(scene)
+    keys = [k for k in params.keys() if ".bsdf." in k and k.endswith("reflectance.value")]
+    assert {k.split(".")[0] for k in keys} == set(BY_NAME)
+    for key in keys:
+        params[key] = floats(np.array(params[key]) * factor)
+    params.update()
+
+
+@pytest.fixture(autouse=True)
+def collected():
+    """Garbage (a failed test's frozen function among it) collected before a
+    test records: Dr.Jit aborts when a frozen function is freed during
+    another's recording."""
+    gc.collect()
+
+
+@pytest.mark.parametrize("auto_opaque", [True, False], ids=["auto_opaque", "literal"])
+@pytest.mark.parametrize("adapter", ADAPTERS)
+def test_frozen_render_replays(adapter, auto_opaque):
+    """Four calls on one instance of the scene, its colours changed before
+    each but the first, then three on another instance: every frozen image is
+    the plain render's, each differs from all before it, and the last calls
+    on each instance replay. (How often Dr.Jit records before that is its
+    own matter: the first value changes and a new instance record again.)"""
+    frozen = dr.freeze(render, auto_opaque=auto_opaque)
+    try:
+        images, recordings, scenes = [], {}, []
+        for instance, factors in (("first", [1.0, 0.9, 0.9, 0.9]), ("second", [0.6, 0.9, 0.9])):
+            scene = scene_of(adapter)
+            scenes.append(scene)        # alive while the function is (its recordings use it)
+            for i, factor in enumerate(factors):
+                if factor != 1.0:
+                    recolour(scene, factor)
+                image = np.array(frozen(scene))
+                np.testing.assert_allclose(image, np.array(render(scene)), rtol=1e-5, atol=1e-6,
+                                           err_msg=f"{instance} instance, call {i}")
+                assert_lit_tiles(image)
+                assert all(not np.allclose(image, earlier, rtol=1e-3) for earlier in images)
+                images.append(image)
+                recordings[instance, i] = frozen.n_recordings
+            last = len(factors) - 1
+            assert recordings[instance, last] == recordings[instance, last - 1], recordings
+    finally:
+        del frozen, scenes

@@ -5,7 +5,8 @@ parameter declarations (``PARAMS``, ``OPTIONS``):
 1. load, eval, pdf, sample: finite, non-negative, upwards, flags;
 2. χ² of the sampler against the pdf (Mitsuba's test), with one Šidák
    correction over every χ² run of the suite, and a negative control per model;
-3. sample weight × pdf = eval, and pdf() = the pdf sample() reports;
+3. sample weight × pdf = eval, pdf() = the pdf sample() reports, and
+   eval_pdf() = (eval(), pdf());
 4. reciprocity (hdr) where the model declares it;
 5. the white furnace, by an independent quadrature: bounded, or 1 where the
    model promises it (energy compensation);
@@ -167,7 +168,7 @@ def test_chi2_detects_a_wrong_pdf(name, tmp_path, monkeypatch):
 
 
 # ----------------------------------------------------------------------------
-#  3. Sample weight x pdf = eval
+#  3. Sample weight x pdf = eval; eval_pdf = (eval, pdf)
 # ----------------------------------------------------------------------------
 
 def random_viewers(rng, n):
@@ -192,10 +193,14 @@ def test_sample_weight_matches_eval_over_pdf(config, rng):
     bs, weight = bsdf.sample(ctx, si, floats(rng.random(n)),
                              points(rng.random(n), rng.random(n)))
     value, pdf = bsdf.eval_pdf(ctx, si, bs.wo)
+    alone = (bsdf.eval(ctx, si, bs.wo), bsdf.pdf(ctx, si, bs.wo))     # what eval_pdf joins
+    dr.eval(weight, value, pdf, bs.wo, bs.pdf, *alone)
     weight, value = np.array(weight).T, np.array(value).T
     bs_pdf, pdf, wo = np.array(bs.pdf), np.array(pdf), np.array(bs.wo).T
     for a in (weight, value, bs_pdf, pdf):
         assert finite(a) and (a >= 0).all()
+    np.testing.assert_allclose(np.array(alone[0]).T, value, rtol=1e-6, atol=1e-9)
+    np.testing.assert_allclose(np.array(alone[1]), pdf, rtol=1e-6, atol=1e-9)
     ok = bs_pdf > 0
     # A real sampler: a usable direction for a good part of the upper viewers
     # (toon's blinn cone over the whole hemisphere reflects ~2/3 below).

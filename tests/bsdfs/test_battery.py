@@ -387,6 +387,41 @@ def test_gradient_matches_finite_differences(config, p, where, x, rng):
     np.testing.assert_allclose(grad, fd, rtol=2e-2)
 
 
+@pytest.mark.parametrize("config", from_entries(lambda name, e: [
+    pytest.param(c, id=config_id(c)) for i, c in enumerate(e.interior)
+    if i == 0 or c.get("energy_compensation")]))
+def test_sample_weight_gradient_is_that_of_eval_over_pdf(config, rng):
+    """A path tracer differentiated as a whole (Mitsuba's ``path``) takes the
+    derivatives of the sample weights: at each sampled direction, held fixed
+    as the integrators hold it, the weight's gradient with respect to every
+    parameter is that of eval / pdf there (whose gradient the test above
+    checks), under a different weight per lane."""
+    bsdf = mi.load_dict(config)
+    params = mi.traverse(bsdf)
+    keys = differentiable_keys(params)
+    for key in keys:
+        dr.enable_grad(params[key])
+    params.update()
+    n = 4096
+    wi = random_hemisphere(rng, n, 0.05)
+    si, ctx, lanes = surface(wi), mi.BSDFContext(), floats(rng.uniform(0.5, 1.5, n))
+    bs, weight = bsdf.sample(ctx, si, floats(rng.random(n)), points(rng.random(n), rng.random(n)))
+    assert np.mean(np.array(dr.detach(bs.pdf)) > 0) > 0.5
+
+    def gradients(per_lane) -> list[np.ndarray]:
+        for k in keys:
+            dr.clear_grad(params[k])
+        dr.backward(dr.sum((per_lane[0] + per_lane[1] + per_lane[2]) * lanes))
+        return [np.array(dr.grad(params[k]), dtype=np.float64).ravel() for k in keys]
+
+    of_weight = gradients(weight)
+    value, pdf = bsdf.eval_pdf(ctx, si, dr.detach(bs.wo))
+    of_ratio = gradients(dr.select(dr.detach(bs.pdf) > 0, value / pdf, 0.0))
+    for key, a, b in zip(keys, of_weight, of_ratio):
+        assert np.abs(b).max() > 0, key
+        np.testing.assert_allclose(a, b, rtol=1e-4, atol=1e-6 * np.abs(b).max(), err_msg=key)
+
+
 # ----------------------------------------------------------------------------
 #  8. Bad values and options: one line, at load time and at update()
 # ----------------------------------------------------------------------------

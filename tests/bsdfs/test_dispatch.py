@@ -165,14 +165,17 @@ def loss_lanes(call, wi, wo) -> mi.Float:
     return value[0] + value[1] + value[2]
 
 
-@pytest.mark.parametrize("flags", FLAG_SETS.values(), ids=FLAG_SETS.keys())
-@pytest.mark.parametrize("indirect", [False, True], ids=["direct", "indirect"])
+@pytest.mark.parametrize("flags, indirect", [
+    pytest.param(FLAG_SETS[name], indirect, id=f"{name}-{'indirect' if indirect else 'direct'}")
+    for name, indirect in (("split", False), ("recorded", False), ("optimised", False),
+                           ("recorded", True))])
 def test_derivatives_through_virtual_calls(flags, indirect):
     """Reverse mode: a loss weighting each lane differently (0, 1, 2, ...)
     through the pointers gives each plugin's parameters the gradient that the
     same loss over its own lanes gives by direct calls. Forward mode: a unit
     tangent on one plugin's parameters moves its lanes as in direct calls and
-    no other lane."""
+    no other lane. (A parameter written as a function of a leaf: with the
+    recorded calls, the ones integrators make.)"""
     configs = list(plugin_configs().values())
     wi, wo, _ = inputs((len(configs) + 1) * LANES_PER_SLOT, seed=5)
     lane_weight = np.arange(len(wi), dtype=np.float64)

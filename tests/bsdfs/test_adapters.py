@@ -24,10 +24,11 @@ import drjit as dr
 import mitsuba as mi
 
 import mi_brdfs
-from support import (BLEND_CHI2_THETA, BLEND_WEIGHT, CHI2_ALPHA, assert_weight_is_value_over_pdf,
-                     blend, blend_chi2_configs, chi2_test, chi2_test_count, eval_and_pdf, floats,
-                     mirrored, moved, neighbour, numbers, plugin_configs, points,
-                     random_hemisphere, sampled, surface, twosided, unit, vec)
+from support import (BLEND_CHI2_THETA, BLEND_WEIGHT, CHI2_ALPHA, active_variant,
+                     assert_weight_is_value_over_pdf, blend, blend_chi2_configs, chi2_test,
+                     chi2_test_count, eval_and_pdf, floats, interaction, mirrored, moved,
+                     neighbour, numbers, outputs, plugin_configs, points, random_hemisphere,
+                     sampled, surface, twosided, unit, vec)
 
 NAMES = [cls.name for cls in mi_brdfs.PLUGINS]
 F = mi.BSDFFlags
@@ -442,3 +443,44 @@ def test_a_flat_normalmap_changes_nothing(name, rng):
     np.testing.assert_allclose(s["wo"][held], own["wo"][held], atol=1e-5)
     for key in ("pdf", "weight"):
         np.testing.assert_allclose(s[key], own[key], rtol=1e-4, atol=1e-7)
+
+
+# ----------------------------------------------------------------------------
+#  One lane at a time: scalar_rgb
+# ----------------------------------------------------------------------------
+
+def adapters_of(name: str) -> dict[str, dict]:
+    config = configs()[name]
+    return {"twosided": twosided(config, moved(config)),
+            "blendbsdf": blend(config, configs()[neighbour(name)]),
+            "normalmap": normalmap(config, TILTED)}
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_adapters_in_scalar_rgb(name):
+    """In scalar_rgb the adapters call the plugin one lane at a time, with
+    Python booleans for masks (False where normalmap drops a direction):
+    eval, pdf, eval_pdf and sample give llvm_ad_rgb's values (to the
+    tolerance of tests/test_variants.py), for viewers on both sides."""
+    rng = np.random.default_rng(17)
+    n = 12
+    wi, wo = both_sides(rng, n)
+    u = rng.random((n, 3))
+    expected = {}
+    for adapter, config in adapters_of(name).items():
+        args = (interaction(wi), vec(wo), floats(u[:, 0]), points(u[:, 1], u[:, 2]))
+        expected[adapter] = outputs(mi.load_dict(config), *args)
+    with active_variant("scalar_rgb"):
+        for adapter, config in adapters_of(name).items():
+            bsdf = mi.load_dict(config)
+            lanes = [outputs(bsdf, interaction(wi[k]), mi.Vector3f(*map(float, wo[k])),
+                             float(u[k, 0]), mi.Point2f(float(u[k, 1]), float(u[k, 2])))
+                     for k in range(n)]
+            held = expected[adapter]["sample pdf"][0] > 0     # (a failed sample's wo is
+            for key, value in expected[adapter].items():        # whatever is left in it)
+                scalar = np.concatenate([lane[key] for lane in lanes], axis=1)
+                lanes_compared = held if key == "sample wo" else slice(None)
+                np.testing.assert_allclose(scalar[:, lanes_compared], value[:, lanes_compared],
+                                           rtol=1e-4, atol=1e-6,
+                                           err_msg=f"{adapter}({name}): {key}")
+    assert all(e["eval"].any() for e in expected.values())

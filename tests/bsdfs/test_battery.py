@@ -13,7 +13,8 @@ parameter declarations (``PARAMS``, ``OPTIONS``):
 6. the numerical extremes: directions down to cos θ = 1e-30 and 0, parameter
    extremes — values, pdfs, sample weights and gradients finite, non-negative;
 7. gradients against finite differences, for every parameter, and for colours
-   and weights also at their bounds (one-sided);
+   and weights also at their bounds (one-sided); the sample weight's gradient
+   that of eval / pdf at the sampled direction;
 8. bad values refused with one line (plugin, parameter, value, valid range) at
    load time and at ``params.update()``; bad options too;
 9. traverse and update; a lobe is dropped only when it cannot matter;

@@ -1,7 +1,8 @@
 """Every plugin inside each of Mitsuba's adapters (``twosided``, ``mask``,
 ``bumpmap``, ``normalmap``, ``blendbsdf``), rendered inside ``dr.freeze``:
-the frozen render equals the plain render, replays (no new recording) when
-values change between calls, and replays on another instance of the scene.
+every frozen image is the plain render's, while values change between calls
+and on another instance of the scene, and the function replays its
+recording on both instances.
 
 The scene is :func:`support.tiles_scene` with a tile per plugin, each inside
 the adapter (textured where the adapter takes a texture: the bitmaps of
@@ -46,13 +47,6 @@ ADAPTERS = {
 }
 
 
-@pytest.fixture(autouse=True, scope="module")
-def no_loose_bsdfs():
-    """A frozen render traces every BSDF alive in the process: collect what
-    earlier modules left for the garbage collector (as tests/render/test_passes.py)."""
-    gc.collect()
-
-
 def scene_of(adapter: str) -> mi.Scene:
     wrap, configs = ADAPTERS[adapter], plugin_configs()
     scene = mi.load_dict(tiles_scene({name: wrap(c) for name, c in configs.items()},
@@ -85,9 +79,10 @@ def recolour(scene: mi.Scene, factor: float) -> None:
 
 @pytest.fixture(autouse=True)
 def collected():
-    """Garbage (a failed test's frozen function among it) collected before a
-    test records: Dr.Jit aborts when a frozen function is freed during
-    another's recording."""
+    """Garbage collected before each test records: a frozen render traces
+    every BSDF alive in the process (what earlier tests left), and Dr.Jit
+    aborts when a frozen function (a failed test's) is freed during another's
+    recording."""
     gc.collect()
 
 

@@ -618,19 +618,19 @@ TILE_PIXELS = 6           # pixels along each side of a tile of tiles_scene
 
 
 def tiles_scene(bsdfs: dict[str, dict], integrator: dict, spp: int = 4,
-                env: float = 0.0, backs: bool = False) -> dict:
+                env: float = 0.0, backs=()) -> dict:
     """A row of unit square tiles in the plane z = 0, one per BSDF (keyed by
     name: the tile's shape is that name), seen from straight above (a camera
-    at height 4 whose view spans the row: the plane maps linearly onto the
-    image) so that tile i fills the columns [i, i + 1) × :data:`TILE_PIXELS`.
-    Above each tile, at height 0.5, a point light: a tile sees its own light
-    from its normal to 55° and the other tiles' lights towards grazing. With
-    ``env``, a constant environment too; with ``backs``, the tiles are turned
-    over (their back faces the camera and the lights). (Not Mitsuba's
-    orthographic camera: 3.9.1's does not record in a frozen function.)"""
+    whose view spans the row: the plane maps linearly onto the image) so that
+    tile i fills the columns [i, i + 1) × :data:`TILE_PIXELS`. Above each
+    tile, at height 0.5, a point light: a tile sees its own light from its
+    normal to 55° and the other tiles' lights towards grazing. With ``env``,
+    a constant environment too; the tiles named in ``backs`` are turned over
+    (their back faces the camera and the lights). (Not Mitsuba's orthographic
+    camera: 3.9.1's does not record in a frozen function.)"""
     T = mi.ScalarTransform4f
     k = len(bsdfs)
-    height = 4.0
+    height = max(4.0, k / 2)          # (a field of view of at most 90°)
     scene = {"type": "scene", "integrator": integrator,
              "sensor": {"type": "perspective", "fov_axis": "x",
                         "fov": 2 * math.degrees(math.atan(k / 2 / height)),
@@ -643,7 +643,7 @@ def tiles_scene(bsdfs: dict[str, dict], integrator: dict, spp: int = 4,
         x = i - (k - 1) / 2
         scene[name] = {"type": "rectangle", "bsdf": bsdf,
                        "to_world": T().translate([x, 0.0, 0.0]) @ T().scale(0.5)
-                       @ T().rotate([1, 0, 0], 180 if backs else 0)}
+                       @ T().rotate([1, 0, 0], 180 if name in backs else 0)}
         scene[f"{name}_light"] = {"type": "point", "position": [x, 0.0, 0.5],
                                   "intensity": {"type": "rgb", "value": 0.5}}
     if env:

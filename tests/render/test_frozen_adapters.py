@@ -4,8 +4,9 @@ every frozen image is the plain render's, while values change between calls
 and on another instance of the scene, and the function replays its
 recording on both instances.
 
-The scene is :func:`support.tiles_scene` with a tile per plugin, each inside
-the adapter (textured where the adapter takes a texture: the bitmaps of
+The scene is :func:`support.tiles_scene` with a tile per plugin and adapter,
+35 in a row (the twosided ones turned over, so that their back is rendered),
+textured where the adapter takes a texture (the bitmaps of
 tests/scenes/assets), lit by point lights and a constant environment, and
 rendered by the path tracer: the adapters' eval, pdf and sample of every
 plugin are traced into one frozen kernel (virtual calls among the tiles).
@@ -47,11 +48,13 @@ ADAPTERS = {
 }
 
 
-def scene_of(adapter: str) -> mi.Scene:
-    wrap, configs = ADAPTERS[adapter], plugin_configs()
-    scene = mi.load_dict(tiles_scene({name: wrap(c) for name, c in configs.items()},
-                                     {"type": "path", "max_depth": 3}, spp=SPP, env=0.3,
-                                     backs=adapter == "twosided"),
+def scene_of() -> mi.Scene:
+    """The tiles: every plugin (its configuration of plugin_configs) inside
+    every adapter, the tile named adapter_plugin."""
+    bsdfs = {f"{adapter}_{name}": wrap(config) for adapter, wrap in ADAPTERS.items()
+             for name, config in plugin_configs().items()}
+    scene = mi.load_dict(tiles_scene(bsdfs, {"type": "path", "max_depth": 3}, spp=SPP, env=0.3,
+                                     backs=[name for name in bsdfs if name.startswith("twosided")]),
                          optimize=False)        # (optimised, equal BSDFs would be merged)
     warm_up(scene)            # what a first render sets up, traced before any recording
     return scene
@@ -61,8 +64,12 @@ def render(scene: mi.Scene) -> mi.TensorXf:
     return mi.render(scene, spp=SPP, seed=1)
 
 
+def tile_names() -> list[str]:
+    return [f"{adapter}_{name}" for adapter in ADAPTERS for name in BY_NAME]
+
+
 def assert_lit_tiles(image: np.ndarray) -> None:
-    for i, name in enumerate(BY_NAME):
+    for i, name in enumerate(tile_names()):
         assert tile(image, i).max() > 0.01, f"{name}: a black tile"
 
 
@@ -71,7 +78,7 @@ def recolour(scene: mi.Scene, factor: float) -> None:
     times ``factor``, written as arrays in memory."""
     params = mi.traverse(scene)
     keys = [k for k in params.keys() if ".bsdf." in k and k.endswith("reflectance.value")]
-    assert {k.split(".")[0] for k in keys} == set(BY_NAME)
+    assert {k.split(".")[0] for k in keys} == set(tile_names())
     for key in keys:
         params[key] = floats(np.array(params[key]) * factor)
     params.update()
@@ -87,8 +94,7 @@ def collected():
 
 
 @pytest.mark.parametrize("auto_opaque", [True, False], ids=["auto_opaque", "literal"])
-@pytest.mark.parametrize("adapter", ADAPTERS)
-def test_frozen_render_replays(adapter, auto_opaque):
+def test_frozen_render_replays(auto_opaque):
     """Four calls on one instance of the scene, its colours changed before
     each but the first, then three on another instance: every frozen image is
     the plain render's, each differs from all before it, and the last calls
@@ -98,7 +104,7 @@ def test_frozen_render_replays(adapter, auto_opaque):
     try:
         images, recordings, scenes = [], {}, []
         for instance, factors in (("first", [1.0, 0.9, 0.9, 0.9]), ("second", [0.6, 0.9, 0.9])):
-            scene = scene_of(adapter)
+            scene = scene_of()
             scenes.append(scene)        # alive while the function is (its recordings use it)
             for i, factor in enumerate(factors):
                 if factor != 1.0:

@@ -5,14 +5,16 @@ parameter declarations (``PARAMS``, ``OPTIONS``):
 1. load, eval, pdf, sample: finite, non-negative, upwards, flags;
 2. χ² of the sampler against the pdf (Mitsuba's test), with one Šidák
    correction over every χ² run of the suite, and a negative control per model;
-3. sample weight × pdf = eval, and pdf() = the pdf sample() reports;
+3. sample weight × pdf = eval, pdf() = the pdf sample() reports, and
+   eval_pdf() = (eval(), pdf());
 4. reciprocity (hdr) where the model declares it;
 5. the white furnace, by an independent quadrature: bounded, or 1 where the
    model promises it (energy compensation);
 6. the numerical extremes: directions down to cos θ = 1e-30 and 0, parameter
    extremes — values, pdfs, sample weights and gradients finite, non-negative;
 7. gradients against finite differences, for every parameter, and for colours
-   and weights also at their bounds (one-sided);
+   and weights also at their bounds (one-sided); the sample weight's gradient
+   that of eval / pdf at the sampled direction;
 8. bad values refused with one line (plugin, parameter, value, valid range) at
    load time and at ``params.update()``; bad options too;
 9. traverse and update; a lobe is dropped only when it cannot matter;
@@ -168,7 +170,7 @@ def test_chi2_detects_a_wrong_pdf(name, tmp_path, monkeypatch):
 
 
 # ----------------------------------------------------------------------------
-#  3. Sample weight x pdf = eval
+#  3. Sample weight x pdf = eval; eval_pdf = (eval, pdf)
 # ----------------------------------------------------------------------------
 
 def random_viewers(rng, n):
@@ -193,10 +195,14 @@ def test_sample_weight_matches_eval_over_pdf(config, rng):
     bs, weight = bsdf.sample(ctx, si, floats(rng.random(n)),
                              points(rng.random(n), rng.random(n)))
     value, pdf = bsdf.eval_pdf(ctx, si, bs.wo)
+    alone = (bsdf.eval(ctx, si, bs.wo), bsdf.pdf(ctx, si, bs.wo))     # what eval_pdf joins
+    dr.eval(weight, value, pdf, bs.wo, bs.pdf, *alone)
     weight, value = np.array(weight).T, np.array(value).T
     bs_pdf, pdf, wo = np.array(bs.pdf), np.array(pdf), np.array(bs.wo).T
     for a in (weight, value, bs_pdf, pdf):
         assert finite(a) and (a >= 0).all()
+    np.testing.assert_allclose(np.array(alone[0]).T, value, rtol=1e-6, atol=1e-9)
+    np.testing.assert_allclose(np.array(alone[1]), pdf, rtol=1e-6, atol=1e-9)
     ok = bs_pdf > 0
     # A real sampler: a usable direction for a good part of the upper viewers
     # (toon's blinn cone over the whole hemisphere reflects ~2/3 below).
@@ -424,6 +430,42 @@ def test_gradient_matches_finite_differences(config, p, where, x, rng):
         x, h, side)
     assert abs(fd) > 1e-3, f"the loss does not depend on {p.name} here (fd = {fd})"
     np.testing.assert_allclose(grad, fd, rtol=2e-2)
+
+
+@pytest.mark.parametrize("config", from_entries(lambda name, e: [
+    pytest.param(e.interior[0], id=config_id(e.interior[0]))]))
+def test_sample_weight_gradient_is_that_of_eval_over_pdf(config, rng):
+    """A path tracer differentiated as a whole (Mitsuba's ``path``) takes the
+    derivatives of the sample weights: at each sampled direction, held fixed
+    as the integrators hold it, the weight's gradient with respect to every
+    parameter is that of eval / pdf there (whose gradient the test above
+    checks), under a different weight per lane. Each model's first interior
+    configuration (the compensated ones take the same code path, at 2-10 s of
+    compiling each)."""
+    bsdf = mi.load_dict(config)
+    params = mi.traverse(bsdf)
+    keys = differentiable_keys(params)
+    for key in keys:
+        dr.enable_grad(params[key])
+    params.update()
+    n = 4096
+    wi = random_hemisphere(rng, n, 0.05)
+    si, ctx, lanes = surface(wi), mi.BSDFContext(), floats(rng.uniform(0.5, 1.5, n))
+    bs, weight = bsdf.sample(ctx, si, floats(rng.random(n)), points(rng.random(n), rng.random(n)))
+    assert np.mean(np.array(dr.detach(bs.pdf)) > 0) > 0.5
+
+    def gradients(per_lane) -> list[np.ndarray]:
+        for k in keys:
+            dr.clear_grad(params[k])
+        dr.backward(dr.sum((per_lane[0] + per_lane[1] + per_lane[2]) * lanes))
+        return [np.array(dr.grad(params[k]), dtype=np.float64).ravel() for k in keys]
+
+    of_weight = gradients(weight)
+    value, pdf = bsdf.eval_pdf(ctx, si, dr.detach(bs.wo))
+    of_ratio = gradients(dr.select(dr.detach(bs.pdf) > 0, value / pdf, 0.0))
+    for key, a, b in zip(keys, of_weight, of_ratio):
+        assert np.abs(b).max() > 0, key
+        np.testing.assert_allclose(a, b, rtol=1e-4, atol=1e-6 * np.abs(b).max(), err_msg=key)
 
 
 # ----------------------------------------------------------------------------

@@ -334,7 +334,7 @@ def direct_call_failures(config: dict) -> list[str]:
             return np.array(getattr(b, method)(name, si), dtype=np.float64).ravel()
         except RuntimeError:
             return "raises"
-    for name, p in bsdf.params.items():
+    for name, p in bsdf.state.params.items():
         if not bool(np.array(bsdf.has_attribute(name)).ravel()[0]):
             failures.append(f"has_attribute({name!r}) is false")
         one = answer(bsdf, "eval_attribute_1", name)
@@ -358,7 +358,7 @@ def update_failures(config: dict) -> list[str]:
     with those values gives, at a few inputs. Returns the failures."""
     bsdf = mi.load_dict(config)
     params, changed, failures = mi.traverse(bsdf), {}, []
-    for p in bsdf.params.values():
+    for p in bsdf.state.params.values():
         if isinstance(config.get(p.name), float):
             lo = p.lo if p.lo is not None else -1.0
             changed[p.name] = lo + 0.37 * (p.probe_hi() - lo)
@@ -458,25 +458,25 @@ GPU_VARIANTS = ["cuda_ad_rgb", "cuda_ad_spectral"] if dr.has_backend(dr.JitBacke
 
 
 def variant_chi2_cases() -> list[tuple[dict, float]]:
-    """One χ² configuration per plugin for the variants test: its catalog's
+    """One χ² configuration per plugin for the variants test: its cases'
     first, at its second incident angle."""
-    from mi_brdfs.tools.catalog import ENTRIES
+    from mi_brdfs.bsdfs.cases import ALL as CASES
     out = []
     for cls in mi_brdfs.PLUGINS:
-        case = ENTRIES[cls.name].chi2[0]
+        case = CASES[cls.name].chi2[0]
         out.append((case.config, case.thetas[min(1, len(case.thetas) - 1)]))
     return out
 
 
 def chi2_test_count() -> int:
     """Every χ² test of the suite, for one Šidák correction: the battery's
-    catalog runs and negative controls, the blends' and the variants'. (An entry that
+    cases' runs and negative controls, the blends' and the variants'. (An entry that
     cannot be built runs none: its own tests fail.)"""
-    from mi_brdfs.tools import catalog
+    from mi_brdfs.bsdfs import cases
     entries = []
     for cls in mi_brdfs.PLUGINS:
         try:
-            entries.append(catalog.entry(cls.name))
+            entries.append(cases.of(cls.name))
         except Exception:
             pass
     battery = sum(len(c.thetas) for e in entries for c in e.chi2)
@@ -485,15 +485,15 @@ def chi2_test_count() -> int:
     return battery + negative + blends + len(CPU_VARIANTS + GPU_VARIANTS) * len(mi_brdfs.PLUGINS)
 
 
-class BrokenEntry:
-    """Stands for the test cases of a plugin whose catalog entry cannot be
+class BrokenCases:
+    """Stands for the test cases of a plugin whose cases cannot be
     built: conftest's pytest_pyfunc_call fails each such case with the error."""
 
     def __init__(self, name: str, error: Exception):
         self.name, self.error = name, error
 
     def __repr__(self) -> str:
-        return f"BrokenEntry({self.name!r})"
+        return f"BrokenCases({self.name!r})"
 
 
 def chi2_test(sample_config: dict, pdf_config: dict, theta_deg: float, phi_deg: float = 0.0,
@@ -519,11 +519,11 @@ BLEND_WEIGHT = 0.2        # the weight of the second BSDF (Mitsuba's blendbsdf t
 
 def plugin_configs() -> dict[str, dict]:
     """{name: configuration} for every registered plugin, in the registry's
-    order: the first interior configuration of its catalog entry without
+    order: the first interior configuration of its cases without
     energy compensation (hdr; each parameter given as a number, away from its
     bounds and from the model's kinks)."""
-    from mi_brdfs.tools.catalog import ENTRIES
-    return {cls.name: dict(next(c for c in ENTRIES[cls.name].interior     # (a copy: Mitsuba
+    from mi_brdfs.bsdfs.cases import ALL as CASES
+    return {cls.name: dict(next(c for c in CASES[cls.name].interior     # (a copy: Mitsuba
                                 if not c.get("energy_compensation")))   # loads a dict once)
             for cls in mi_brdfs.PLUGINS}
 

@@ -39,7 +39,7 @@ cases, folder = json.loads(sys.argv[4]), sys.argv[6]
 sys.path.insert(0, sys.argv[5])                 # the tests' support module
 from support import (degenerate_configs, degenerate_lanes, direct_call_failures,
                      lambert_diffuse_difference, property_form_failures, update_failures)
-from mi_brdfs.tools.catalog import ENTRIES
+from mi_brdfs.bsdfs.cases import ALL as CASES
 rng = np.random.default_rng(7)
 N = 64
 v = rng.normal(size=(N, 3)); v /= np.linalg.norm(v, axis=1, keepdims=True); v[:, 2] = np.abs(v[:, 2])
@@ -135,7 +135,7 @@ for config, theta in cases:
     if variant != "llvm_ad_rgb":       # (the battery's variant runs them itself)
         r["forms"] = property_form_failures(config["type"], folder)
         r["calls"] = direct_call_failures(config)
-    r["update"] = update_failures(ENTRIES[config["type"]].interior[0])
+    r["update"] = update_failures(CASES[config["type"]].interior[0])
     results[config["type"]] = r
 checks = {}
 if variant != "llvm_ad_rgb":

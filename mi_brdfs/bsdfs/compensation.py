@@ -180,8 +180,10 @@ class Table:
     """A function g(ω, p) >= 0 of a direction and parameters, and its
     cosine-weighted average G_avg(p), for the active variant."""
 
-    def __init__(self, axes: tuple[Axis, ...], values: np.ndarray, directions: int = 1):
+    def __init__(self, axes: tuple[Axis, ...], values: np.ndarray, directions: int = 1,
+                 specs: tuple = ()):
         self.axes, self.directions = tuple(axes), directions
+        self.specs = tuple(specs)           # the shipped tables it is made from
         # B-spline coefficients clipped at 0: the interpolant stays >= 0 with no
         # clamp, so G_avg below is the exact integral of what is looked up. (Not
         # at 1: near F0 = 1 at large alpha, W rises steeply to 1 and a clip there
@@ -314,14 +316,14 @@ def _cached(name: str, make: Callable[[], Table]) -> Table:
 
 def table(spec: AlbedoSpec) -> Table:
     """The shipped single-scattering albedo E of ``spec`` and its average E_avg."""
-    return _cached(spec.name, lambda: Table(spec.axes, shipped(spec), spec.directions))
+    return _cached(spec.name, lambda: Table(spec.axes, shipped(spec), spec.directions, (spec,)))
 
 
 def complement(spec: AlbedoSpec) -> Table:
     """g = 1 - E: the compensation of a lobe that reflects all it does not
     lose (its average is 1 - E_avg)."""
     return _cached("1 - " + spec.name,
-                   lambda: Table(spec.axes, 1.0 - shipped(spec), spec.directions))
+                   lambda: Table(spec.axes, 1.0 - shipped(spec), spec.directions, (spec,)))
 
 
 def walk_residual(white: AlbedoSpec, black: AlbedoSpec, walk: WalkSpec) -> Table:
@@ -332,7 +334,7 @@ def walk_residual(white: AlbedoSpec, black: AlbedoSpec, walk: WalkSpec) -> Table
         e1, e0, w = shipped(white), shipped(black), shipped(walk)
         f0 = walk.axes[2].nodes()
         single = f0 * e1[..., None] + (1.0 - f0) * e0[..., None]
-        return Table(walk.axes, np.clip(w - single, 0.0, 1.0), 1)
+        return Table(walk.axes, np.clip(w - single, 0.0, 1.0), 1, (white, black, walk))
     return _cached(f"{walk.name} - {white.name}", make)
 
 

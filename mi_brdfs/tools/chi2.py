@@ -31,7 +31,7 @@ cell that has not converged there is counted in :attr:`unconverged`, and
 the test fails: the report says so instead of a p-value it cannot trust.
 
 The test keeps its power: a density that is wrong by a few per cent (the
-catalog's negative controls) is still rejected, since finer integration
+models' negative controls) is still rejected, since finer integration
 only removes the integration error, never the sampler's.
 """
 from __future__ import annotations

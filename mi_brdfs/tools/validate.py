@@ -24,20 +24,20 @@ adds the three and one line in :func:`validate`):
    large plane seen by an orthographic camera at theta_i) inside a uniform white
    environment; the two must agree. Albedos above 1 are flagged with by how much
    and where. Models with ``energy_compensation`` get a third curve beside the
-   two modes, hdr compensated. Where the catalog promises albedo 1 (a white
-   energy-preserving configuration, :func:`.catalog.promises_one`) the albedo
+   two modes, hdr compensated. Where a model's cases promise albedo 1 (a white
+   energy-preserving configuration, :func:`mi_brdfs.bsdfs.cases.promises_one`) the albedo
    must be 1 within 1 % up to 85°; a lobe's colour (m_S) scales its
    compensated albedo linearly, Fresnel is the only per-bounce reflectance.
    The scan-line modes are
    the lecture's clamped formulas: their albedo above 1 is documented
    behaviour, not a failure.
 3. **Sampling** — Mitsuba's χ² test (p-value) of every sampler of the
-   catalog (:func:`.catalog.report_chi2`: all of the battery's tests; with
+   models' cases (:func:`mi_brdfs.bsdfs.cases.report_chi2`: all of the battery's tests; with
    ``--quick`` the representative ones of each model), with the density
    integrated per cell until it converges (:mod:`.chi2`: a fixed ``ires``
    rejects correct samplers of sharp lobes), and the variance of the sample
    weights (0 would be perfect importance sampling). The **negative
-   controls** (:data:`.catalog.NEGATIVE`: a sampler against the pdf of a
+   controls** (:func:`mi_brdfs.bsdfs.cases.negative_controls`: a sampler against the pdf of a
    slightly different lobe) must be rejected: the test has the power to see
    a wrong pdf.
 4. **Lobes** — eval (f·cos theta_o) in the plane of incidence for several
@@ -51,7 +51,7 @@ documented behaviour (what the scan-line modes and Schlick's approximation do
 by design, measured) or a documented known limitation — each with its reason
 (the table :data:`DOCUMENTED`; the README lists the limitations with their
 measured numbers). ``mi-brdfs validate`` exits with status 1 when a check
-fails that is not documented. New rows in the catalog's sections get their
+fails that is not documented. New rows in the models' cases get their
 checks without any change here.
 
 The report folder is new, empty or a previous report (never a folder with
@@ -73,7 +73,8 @@ from typing import Callable
 import numpy as np
 
 from .._jit import from_numpy
-from . import analysis, catalog, compare, outputs
+from ..bsdfs import cases
+from . import analysis, compare, outputs
 from .chi2 import ConvergedChiSquareTest
 
 MODES = ("hdr", "scanline")
@@ -326,7 +327,7 @@ def furnace_section(size: Size, out: str, models: dict) -> list[dict]:
                 rows.append({
                     "model": name, "config": label, "mode": mode,
                     "compensated": mode == COMPENSATED,
-                    "promised": catalog.promises_one(name, config),   # albedo = 1
+                    "promised": cases.promises_one(name, config),     # albedo = 1
                     "angles": list(size.angles), "quadrature": quad.tolist(),
                     "render": rend.tolist(), "max": float(quad.max()),
                     "max_at": size.angles[worst], "mean": float(quad.mean()),
@@ -377,7 +378,7 @@ def chi2_count(models: dict, negatives: dict) -> int:
 
 def sampling_section(size: Size, models: dict, count: int | None = None) -> list[dict]:
     """χ² and sample weights of every test of ``models`` ({model: [(label,
-    catalog.Chi2)]}), at the catalog's resolution and viewer azimuth.
+    cases.Chi2)]}), at the case's resolution and viewer azimuth.
     ``count``: the number of χ² tests the significance is corrected for."""
     import drjit as dr
     import mitsuba as mi
@@ -407,7 +408,7 @@ def sampling_section(size: Size, models: dict, count: int | None = None) -> list
 
 
 def negative_section(size: Size, negatives: dict, count: int) -> list[dict]:
-    """The χ² test of each negative control (:data:`.catalog.NEGATIVE`): the
+    """The χ² test of each negative control (:func:`.cases.negative_controls`): the
     sampler of one configuration against the pdf of a slightly different
     one. Each must be rejected."""
     rows = []
@@ -694,7 +695,7 @@ def furnace_html(results: dict) -> str:
     esc, status = html.escape, _status(results)
     parts = ["<h2>2. White furnace</h2><p>Rows <i>hdr, compensated</i> are the same "
              "configuration with <code>energy_compensation</code>: its albedo is 1 "
-             "where its lobes are white (checked against 1 where the catalog promises "
+             "where its lobes are white (checked against 1 where its cases promise "
              "it); a lobe's colour scales its compensated albedo linearly (m_S = 0.5 "
              "reflects 0.5), Fresnel being the only per-bounce reflectance (section 5). "
              "The scan-line rows are the lecture's clamped formulas (no 1/π): an albedo "
@@ -790,9 +791,10 @@ def validate(out_dir: str, quick: bool = False, log: Callable[[str], None] = pri
 
     compare.require_reports()
     size = QUICK if quick else FULL
-    furnace = catalog.quick(catalog.FURNACE, 2) if quick else catalog.FURNACE
-    chi2 = catalog.report_chi2(quick)
-    count = chi2_count(chi2, catalog.NEGATIVE)
+    furnace = {name: cases.report_furnace(name)[:2 if quick else None] for name in cases.ALL}
+    chi2 = cases.report_chi2(quick)
+    negative = cases.negative_controls()
+    count = chi2_count(chi2, negative)
     start = time.perf_counter()
     with outputs.report_dir(out_dir, "validate") as tmp:
         results = {"size": "quick" if quick else "full", "mitsuba": mi.__version__,
@@ -804,9 +806,9 @@ def validate(out_dir: str, quick: bool = False, log: Callable[[str], None] = pri
         results["furnace"] = furnace_section(size, tmp, furnace)
         log("sampling ...")
         results["sampling"] = sampling_section(size, chi2, count)
-        results["negative"] = negative_section(size, catalog.NEGATIVE, count)
+        results["negative"] = negative_section(size, negative, count)
         log("lobes ...")
-        results["lobes"] = lobe_section(tmp, catalog.LOBES)
+        results["lobes"] = lobe_section(tmp, cases.lobe_configs())
         log("ground truth ...")
         from . import groundtruth
         results["groundtruth"] = groundtruth.report_section(tmp, quick)

@@ -1,5 +1,5 @@
 """The conformance battery: every registered plugin, in both modes, through the
-same checks, driven by its catalog entry (mi_brdfs/tools/catalog.py) and its
+same checks, driven by its cases (its module's ``cases()``, mi_brdfs/bsdfs/cases.py) and its
 parameter declarations (``PARAMS``, ``OPTIONS``):
 
 1. load, eval, pdf, sample: finite, non-negative, upwards, flags;
@@ -27,9 +27,9 @@ parameter declarations (``PARAMS``, ``OPTIONS``):
 A model's own module keeps only its independent transcription of the lecture
 and what is particular to it.
 
-The cases are built from the declarations and the catalog alone: no BSDF is
+The tests are built from the declarations and the cases alone: no BSDF is
 loaded while pytest collects them, and each model's entry is built on its
-own, so a broken model or catalog entry fails its own tests only (a plugin
+own, so a broken model or its cases fail its own tests only (a plugin
 whose entry cannot be built gets one failing case per test, ``NAME-entry``;
 tests/bsdfs/test_registry.py checks that).
 """
@@ -46,10 +46,10 @@ import drjit as dr
 import mitsuba as mi
 
 from mi_brdfs.bsdfs import BY_NAME
-from mi_brdfs.bsdfs.base import ParameterError
-from mi_brdfs.tools import catalog
-from mi_brdfs.tools.catalog import ENTRIES
-from support import (CHI2_ALPHA, BrokenEntry, albedo, assert_refused, chi2_test, chi2_test_count,
+from mi_brdfs.bsdfs.params import ParameterError
+from mi_brdfs.bsdfs import cases
+from mi_brdfs.bsdfs.cases import ALL as CASES
+from support import (CHI2_ALPHA, BrokenCases, albedo, assert_refused, chi2_test, chi2_test_count,
                      config_id, direct_call_failures, eval_and_pdf, error_line, finite,
                      finite_difference, floats, points, f32, mirror_pairs,
                      property_form_failures, random_hemisphere, surface, vec)
@@ -59,15 +59,15 @@ MODES = ("hdr", "scanline")
 
 
 def from_entries(make, nargs: int = 1) -> list:
-    """pytest params: ``make(name, entry)`` for every plugin's catalog entry. A
+    """pytest params: ``make(name, cases)`` for every plugin's cases. A
     plugin whose entry cannot be built gets one case, failing with its error
     (conftest.pytest_pyfunc_call), instead of a collection error for all."""
     params = []
     for name in PLUGINS:
         try:
-            params += make(name, catalog.entry(name))
+            params += make(name, cases.of(name))
         except Exception as error:
-            params.append(pytest.param(*[BrokenEntry(name, error)] * nargs, id=f"{name}-entry"))
+            params.append(pytest.param(*[BrokenCases(name, error)] * nargs, id=f"{name}-cases"))
     return params
 
 
@@ -99,12 +99,12 @@ def wants_scanline(config: dict) -> dict:
 
 
 # ----------------------------------------------------------------------------
-#  0. The catalog covers every plugin
+#  0. Every plugin's cases cover every check
 # ----------------------------------------------------------------------------
 
 @pytest.mark.parametrize("name", PLUGINS)
-def test_catalog_covers_the_plugin(name):
-    entry = ENTRIES[name]
+def test_cases_cover_the_plugin(name):
+    entry = CASES[name]
     chi2_modes = {m for c in entry.chi2 for m in modes_of(c.config)}
     assert chi2_modes == set(MODES), f"{name}: χ² in {chi2_modes} only"
     for part in ("consistency", "furnace", "extremes", "interior"):
@@ -164,8 +164,8 @@ def test_chi2_detects_a_wrong_pdf(name, tmp_path, monkeypatch):
     """Negative control: a sampler tested against the pdf of a slightly
     different parameter must be rejected, or the χ² tests prove nothing."""
     monkeypatch.chdir(tmp_path)
-    sampled, pdf, theta = ENTRIES[name].negative
-    chi2 = chi2_test(sampled, pdf, theta, ENTRIES[name].extra.get("negative_phi", 0.0))
+    sampled, pdf, theta = CASES[name].negative
+    chi2 = chi2_test(sampled, pdf, theta, CASES[name].negative_phi)
     assert not chi2.run(significance_level=ALPHA, test_count=CHI2_TEST_COUNT, quiet=True)
 
 
@@ -226,7 +226,7 @@ RECIPROCAL = from_entries(lambda name, e: [pytest.param(c, id=config_id(c))
 @pytest.mark.parametrize("config", RECIPROCAL)
 def test_reciprocity(config, rng):
     """hdr: eval(w_i, w_o)/cos θ_o = eval(w_o, w_i)/cos θ_i (the BRDF is symmetric)."""
-    wi, wo = mirror_pairs(rng, 4096, ENTRIES[config["type"]].lobe_width, min_cos=0.01)
+    wi, wo = mirror_pairs(rng, 4096, CASES[config["type"]].lobe_width, min_cos=0.01)
     bsdf = mi.load_dict(config)
     forward = eval_and_pdf(bsdf, wi, wo)[0] / wo[:, 2:3]
     backward = eval_and_pdf(bsdf, wo, wi)[0] / wi[:, 2:3]
@@ -373,7 +373,7 @@ def test_declared_bounds(name, p, end):
         except Exception as error:              # (Mitsuba wraps the ParameterError)
             assert "is invalid; valid:" in error_line(error), error_line(error)
             continue
-        declared = loaded.params.get(p.name, p)     # (a parameter read only when given)
+        declared = loaded.state.params.get(p.name, p)   # (a parameter read only when given)
         lo, hi = declared.far()
         assert_finite_everywhere({**config, p.name: lo if end == "lo" else hi})
         tried += 1
@@ -414,7 +414,7 @@ def test_gradient_matches_finite_differences(config, p, where, x, rng):
     traverse, as an optimiser does) = a finite difference of fresh loads:
     central inside the range, one-sided at a bound (where a lobe whose colour
     or weight is 0 must still get its gradient)."""
-    wi, wo = mirror_pairs(rng, 1024, ENTRIES[config["type"]].lobe_width, min_cos=0.1)
+    wi, wo = mirror_pairs(rng, 1024, CASES[config["type"]].lobe_width, min_cos=0.1)
     config = {**config, p.name: x}
     bsdf = mi.load_dict(config)
     params = mi.traverse(bsdf)
@@ -525,7 +525,7 @@ def test_bad_value_is_refused_at_update(config, p, value, shown):
 
 
 OPTION_CASES = [pytest.param(name, o, id=f"{name}-{o.name}")
-                for name, cls in PLUGINS.items() for o in cls.options()]
+                for name, cls in PLUGINS.items() for o in cls.all_options()]
 
 
 @pytest.mark.parametrize("name, option", OPTION_CASES)
@@ -577,7 +577,7 @@ def test_traverse_exposes_every_parameter_read(config):
     bsdf = mi.load_dict(config)
     params = mi.traverse(bsdf)
     names = {k.split(".")[0] for k in params.keys()}
-    assert names == set(bsdf.params)
+    assert names == set(bsdf.state.params)
     for key in params.keys():
         if key.endswith(".to_uv"):          # a bitmap's own transform
             continue
@@ -589,11 +589,11 @@ def test_traverse_exposes_every_parameter_read(config):
 def test_update_matches_a_fresh_load(config, rng):
     """Every parameter changed through traverse + update() gives the BSDF a
     fresh load with those values gives."""
-    wi, wo = mirror_pairs(rng, 1024, ENTRIES[config["type"]].lobe_width, min_cos=0.05)
+    wi, wo = mirror_pairs(rng, 1024, CASES[config["type"]].lobe_width, min_cos=0.05)
     bsdf = mi.load_dict(config)
     params = mi.traverse(bsdf)
     changed = {}
-    for p in bsdf.params.values():
+    for p in bsdf.state.params.values():
         if isinstance(config.get(p.name), float):
             lo = p.lo if p.lo is not None else -1.0
             hi = p.probe_hi()
@@ -610,7 +610,7 @@ def switches(name: str) -> list[tuple]:
     """(Param, value) of plugin ``name`` that switch a lobe off at load time:
     a colour at 0, a weight at either end (loaded: at run time)."""
     default = mi.load_dict({"type": name}).flags()
-    read = mi.load_dict({"type": name}).params
+    read = mi.load_dict({"type": name}).state.params
     found = []
     for p in PLUGINS[name].PARAMS:
         if p.role not in ("colour", "weight") or p.name not in read:
@@ -658,7 +658,7 @@ def test_a_number_folded_at_0_or_1_unfolds_when_it_changes(name, rng):
     (BRDF.switch); changed through update(), the BSDF equals a fresh load with
     the new value, and what its calls trace changes with it (trace_key: a
     frozen render records again instead of replaying the folded number)."""
-    wi, wo = mirror_pairs(rng, 1024, ENTRIES[name].lobe_width, min_cos=0.05)
+    wi, wo = mirror_pairs(rng, 1024, CASES[name].lobe_width, min_cos=0.05)
     cases = [(p, v) for p in PLUGINS[name].PARAMS if p.kind == "float" for v in (0.0, 1.0)
              if (p.lo is None or p.lo <= v) and (p.hi is None or v <= p.hi)]
     assert cases

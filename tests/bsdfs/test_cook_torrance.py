@@ -386,7 +386,7 @@ def test_roughness_far_end(distribution, geometry):
     (1e6) beyond it: the single-scattering lobe is at its limit there (no
     reflection: an albedo below 1e-6 up to 89.9°), the same at 1e7 and at the
     largest float32, and infinity is refused."""
-    from mi_brdfs.bsdfs.base import FLOAT_MAX
+    from mi_brdfs.bsdfs.params import FLOAT_MAX
     from mi_brdfs.bsdfs.microfacet import ALPHA_MAX
     config = {"type": "cook_torrance", "distribution": distribution, "geometry": geometry,
               "k": 0.0, "f0": 1.0}

@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 from mi_brdfs.bsdfs import BY_NAME
-from mi_brdfs.tools import catalog, cli, groundtruth, validate
+from mi_brdfs.bsdfs import cases
+from mi_brdfs.tools import cli, groundtruth, validate
 
 
 @pytest.fixture(scope="module")
@@ -58,7 +59,7 @@ def test_furnace_flags(report):
 
 def test_furnace_shows_compensated_beside_uncompensated(report):
     """Every configuration of a compensable model has its compensated curve on
-    the same plot; where the catalog promises albedo 1 it is 1 within 1 % up to
+    the same plot; where a model's cases promise albedo 1 it is 1 within 1 % up to
     85° (a check that can fail: see test_compensation_check_fails_off_one), and
     compensation only ever adds light, never above 1 (EON, Oren-Nayar's
     compensated form, also removes the lecture model's excess above 1)."""
@@ -92,7 +93,7 @@ def test_sampling_passes(report):
     lambert = [s for s in r["sampling"] if s["model"] == "lambert"]
     assert all(s["weight_variance"] < 1e-10 for s in lambert)     # perfect importance sampling
     assert all(n["rejected"] for n in r["negative"])               # and it sees a wrong pdf
-    assert {n["model"] for n in r["negative"]} == set(catalog.NEGATIVE)
+    assert {n["model"] for n in r["negative"]} == set(cases.negative_controls())
 
 
 def test_quick_samples_every_model_at_representative_parameters(report):
@@ -276,15 +277,15 @@ def test_polar_lobe_tick_labels_do_not_collide():
 @pytest.mark.slow
 def test_the_full_reports_chi2_passes_and_rejects_its_negative_controls():
     """The χ² part of the full report (not its renders): every test of the
-    catalog passes at the report's sample count, with the density integrated
+    models' cases passes at the report's sample count, with the density integrated
     until it converges, and every negative control is rejected."""
-    tests = catalog.report_chi2()
-    count = validate.chi2_count(tests, catalog.NEGATIVE)
+    tests = cases.report_chi2()
+    count = validate.chi2_count(tests, cases.negative_controls())
     size = dataclasses.replace(validate.FULL, weight_samples=1000)    # χ² as in the report
     rows = validate.sampling_section(size, tests, count)
-    assert len(rows) == sum(len(c.thetas) for e in catalog.ENTRIES.values() for c in e.chi2)
+    assert len(rows) == sum(len(c.thetas) for e in cases.ALL.values() for c in e.chi2)
     failed = [(r["model"], r["config"], r["theta"], r["p_value"], r["unconverged"])
               for r in rows if not r["passed"]]
     assert not failed
-    negative = validate.negative_section(validate.FULL, catalog.NEGATIVE, count)
+    negative = validate.negative_section(validate.FULL, cases.negative_controls(), count)
     assert len(negative) == 5 and all(n["rejected"] for n in negative), negative

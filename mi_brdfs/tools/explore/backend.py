@@ -6,8 +6,8 @@ the package's modules move or are renamed, only this file changes. What it
 takes:
 
 - the plugins and their declarations (``bsdfs.PLUGINS``; each class's
-  ``PARAMS``, ``options()`` and ``compensable``), as JSON;
-- the loader's one-line error (``bsdfs.base.ParameterError``), through
+  ``PARAMS``, ``all_options()`` and ``compensable``), as JSON;
+- the loader's one-line error (``bsdfs.params.ParameterError``), through
   :func:`load`;
 - the lobe evaluations of :mod:`mi_brdfs.tools.analysis` (its albedo
   quadrature launches a kernel per angle, too slow for a slider:
@@ -82,7 +82,7 @@ def course_models() -> list[dict]:
     return [{"name": cls.name, "source": "mi_brdfs", "title": _title(cls),
              "compensable": bool(cls.compensable),
              "params": [_param(p) for p in cls.PARAMS],
-             "options": [_option(o) for o in cls.options()]} for cls in PLUGINS]
+             "options": [_option(o) for o in cls.all_options()]} for cls in PLUGINS]
 
 
 # ----------------------------------------------------------------------------
@@ -101,7 +101,7 @@ def checked():
     Mitsuba wraps an exception raised in a Python plugin's constructor in a
     RuntimeError that carries the traceback: the plugin's own message is its
     last line, after the exception's class name."""
-    from ...bsdfs.base import ParameterError
+    from ...bsdfs.params import ParameterError
     try:
         yield
     except ParameterError as error:

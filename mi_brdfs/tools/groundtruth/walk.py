@@ -182,12 +182,13 @@ def brdf(distribution: str, wi, wo, alpha, f0=1.0, paths: int = 100_000, seed: i
 
 def table(spec, paths: int | None = None, seed: int | None = None, rows=None,
           log=None) -> np.ndarray:
-    """W at the nodes of an :class:`mi_brdfs.bsdfs.energy.WalkSpec` (μ, α, F0):
+    """W at the nodes of a :class:`mi_brdfs.bsdfs.compensation.WalkSpec` (μ, α, F0):
     one call per μ node, every α node up to ``spec.alpha_max`` on common
     random numbers (the nodes beyond hold the last one's W). μ = 0 is walked
     at ``MU_MIN``, α = 0 at ``ALPHA_MIN`` (as the plugins clamp them).
     ``rows``: only these μ nodes (the others are NaN)."""
-    from ...bsdfs.energy import MU_MIN, WALK_PATHS, WALK_SEED
+    from ...bsdfs.compensation import WALK_PATHS
+    from ..tables import MU_MIN, WALK_SEED
     from ...bsdfs.microfacet import ALPHA_MIN
     mu_axis, alpha_axis, f0_axis = spec.axes
     mus = np.maximum(mu_axis.nodes(), MU_MIN)

@@ -296,3 +296,30 @@ def test_spectral_bitmap_above_one(variant, capfd):
             np.testing.assert_allclose(values["lambert", value], values["diffuse", value],
                                        rtol=1e-6)
         np.testing.assert_allclose(values["lambert", 3.0], 0.8 / np.pi, rtol=1e-5)
+
+
+def test_plain_numbers_read_as_floats_in_scalar_variants():
+    """In scalar variants every plain-number parameter of every plugin reads as
+    a Python float through mi.traverse, as a built-in's does (dielectric's eta),
+    and can be written and updated: the new value is what the plugin uses, and
+    a bad one is refused at update() as at load time."""
+    import mitsuba as mi
+    from mi_brdfs.bsdfs import PLUGINS
+    from mi_brdfs.bsdfs.params import ParameterError
+    from support import active_variant
+    with active_variant("scalar_rgb"):
+        assert type(mi.traverse(mi.load_dict({"type": "dielectric"}))["eta"]) is float
+        plain = [(cls.name, p) for cls in PLUGINS for p in cls.PARAMS if p.kind == "float"]
+        assert plain                                     # (k, f0, smoothness)
+        for name, p in plain:
+            bsdf = mi.load_dict({"type": name})
+            params = mi.traverse(bsdf)
+            assert type(params[p.name]) is float, (name, p.name, type(params[p.name]))
+            value = 0.5 * (p.lo + p.hi)
+            params[p.name] = value
+            params.update()
+            assert params[p.name] == pytest.approx(value)
+            assert getattr(bsdf, "m_" + p.name) == pytest.approx(value)
+            params[p.name] = p.hi + 1.0
+            with pytest.raises(ParameterError, match=f"{name}: parameter '{p.name}'"):
+                params.update()

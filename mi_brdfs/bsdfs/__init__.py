@@ -13,6 +13,7 @@
 """
 from __future__ import annotations
 
+from .ashikhmin_shirley import AshikhminShirley
 from .base import register_plugin
 from .blinn import Blinn
 from .cook_torrance import CookTorrance
@@ -27,7 +28,7 @@ from .ward import Ward
 # package's exports, the plugins registered with Mitsuba, the cases the tests,
 # the validation report, the bench and the fit run (each model's cases()),
 # the documentation (tests/bsdfs/test_registry.py says where a model is missing).
-PLUGINS = (Lambert, OrenNayar, Toon, Phong, Blinn, Ward, CookTorrance)
+PLUGINS = (Lambert, OrenNayar, Toon, Phong, Blinn, Ward, CookTorrance, AshikhminShirley)
 BY_NAME = {cls.name: cls for cls in PLUGINS}     # plugin name -> class
 
 __all__ = ["PLUGINS", "BY_NAME", *(cls.__name__ for cls in PLUGINS)]

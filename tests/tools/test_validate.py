@@ -289,4 +289,5 @@ def test_the_full_reports_chi2_passes_and_rejects_its_negative_controls():
               for r in rows if not r["passed"]]
     assert not failed
     negative = validate.negative_section(validate.FULL, cases.negative_controls(), count)
-    assert len(negative) == 5 and all(n["rejected"] for n in negative), negative
+    assert len(negative) == len(cases.negative_controls()) >= 5, negative
+    assert all(n["rejected"] for n in negative), negative

@@ -24,16 +24,19 @@ EXIT_STATUS = {
                 "1: an error (e.g. the port is taken)."],
 }
 URL = re.compile(r"\b[a-z][a-z0-9+.-]*://[^\s),;]+")
+FLAG = re.compile(r"(?<![\w`-])--?[a-zA-Z][\w-]*")         # -D, --help: literals, not dashes
 
 
 def sentence(text: str) -> str:
     """A help text as a sentence of reStructuredText: capitalised, with a full
-    stop, URLs as literals (not links), reST's special characters escaped."""
+    stop, URLs and flags as literals (not links, not dashes), reST's special
+    characters escaped."""
     text = " ".join((text or "").split())
     if not text:
         return ""
     text = text.replace("\\", "\\\\").replace("*", "\\*").replace("`", "\\`").replace("|", "\\|")
     text = URL.sub(lambda m: f"``{m.group(0)}``", text)
+    text = FLAG.sub(lambda m: f"``{m.group(0)}``", text)
     text = text[0].upper() + text[1:]
     return text if text.endswith((".", "?", "!", ".)")) else text + "."
 

@@ -1,19 +1,22 @@
 """The renders of the plugin pages, made by the documentation build from each
 model's ``cases().pictures`` (:class:`mi_brdfs.bsdfs.cases.Pictures`).
 
-A unit sphere seen from the front, lit by a key light from the upper left in
-both modes, with a dim fill light from the right in scan-line mode (the
-scan-line integrator sums point and directional lights exactly) and a uniform
-environment in hdr mode (Mitsuba's path tracer). Small and cheap: 128² pixels,
-16 (scan-line) or 128 (hdr) samples per pixel. Each render is kept under a name
-made from everything it depends on (the plugin dictionary, the scene's
-settings, the code and tables of the BSDFs and the renderer, Mitsuba's
-version), so a rebuild renders only what changed.
+A unit sphere seen from the front against a black background, lit by a key
+light from the upper left: in scan-line mode with a dim fill light from the
+right (the scan-line integrator sums point and directional lights exactly),
+in hdr mode with a uniform grey environment (Mitsuba's path tracer). The hdr
+key light is π times brighter: the lecture's scan-line Lambert term has no
+1/π, so both modes show a Lambert surface equally bright. Small and cheap:
+128² pixels, 16 (scan-line) or 128 (hdr) samples per pixel. Each render is
+kept under a name made from everything it depends on (the plugin dictionary,
+the scene's settings, the code and tables of the BSDFs and the renderer,
+Mitsuba's version), so a rebuild renders only what changed.
 """
 from __future__ import annotations
 
 import hashlib
 import json
+import math
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
@@ -21,15 +24,16 @@ from pathlib import Path
 RES = 128
 SPP = {"scanline": 16, "hdr": 128}
 TONEMAP = {"scanline": "clamp", "hdr": "aces"}      # mi_brdfs.render.tonemap operators
-KEY = {"type": "directional", "direction": [0.55, -0.5, -0.65],
-       "irradiance": {"type": "rgb", "value": 2.0}}
+KEY_DIRECTION = [0.55, -0.5, -0.65]
+KEY = {"scanline": 0.8, "hdr": 0.8 * math.pi}        # irradiance
 FILL = {"type": "directional", "direction": [-0.8, 0.1, -0.6],
-        "irradiance": {"type": "rgb", "value": 0.3}}
-SKY = {"type": "constant", "radiance": {"type": "rgb", "value": 0.25}}
+        "irradiance": {"type": "rgb", "value": 0.2}}
+SKY = {"type": "constant", "radiance": {"type": "rgb", "value": 0.2}}
 LIGHTS = {"scanline": "a key light from the upper left and a dim fill light from the right, "
                       "summed by the scan-line integrator, clamped to [0, 1]",
-          "hdr": "the same key light and a uniform grey environment, path traced, "
-                 "ACES tone mapping"}
+          "hdr": "the key light π times brighter (the hdr Lambert term has the 1/π the "
+                 "lecture's lacks) and a uniform grey environment, path traced, ACES tone "
+                 "mapping"}
 
 
 @dataclass(frozen=True)
@@ -45,13 +49,14 @@ def scene(bsdf: dict, mode: str) -> dict:
     camera = mi.ScalarTransform4f().look_at(origin=[0, 0, 4.4], target=[0, 0, 0], up=[0, 1, 0])
     return {
         "type": "scene",
-        "integrator": {"type": "course", "mode": mode},
+        "integrator": {"type": "course", "mode": mode, "hide_emitters": True},
         "sensor": {"type": "perspective", "fov": 30, "to_world": camera,
                    "film": {"type": "hdrfilm", "width": RES, "height": RES,
                             "rfilter": {"type": "box"}},
                    "sampler": {"type": "independent", "sample_count": SPP[mode]}},
         "sphere": {"type": "sphere", "bsdf": bsdf},
-        "key": KEY,
+        "key": {"type": "directional", "direction": KEY_DIRECTION,
+                "irradiance": {"type": "rgb", "value": KEY[mode]}},
         **({"fill": FILL} if mode == "scanline" else {"sky": SKY}),
     }
 
@@ -71,7 +76,8 @@ def _code() -> str:
 
 def _name(plugin: str, bsdf: dict, mode: str) -> str:
     import mitsuba as mi
-    key = json.dumps([bsdf, mode, RES, SPP, TONEMAP, KEY, FILL, SKY, _code(), mi.__version__],
+    key = json.dumps([bsdf, mode, RES, SPP, TONEMAP, KEY_DIRECTION, KEY, FILL, SKY, _code(),
+                      mi.__version__],
                      sort_keys=True, default=str)
     return f"{plugin}-{mode}-{hashlib.sha256(key.encode()).hexdigest()[:16]}.png"
 

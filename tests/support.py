@@ -409,7 +409,8 @@ def degenerate_inputs() -> list[tuple]:
 
 def degenerate_configs() -> list[dict]:
     """Every plugin in both modes, every microfacet distribution and geometry,
-    both microfacet samplers, energy compensation, and the models' options."""
+    both microfacet samplers, anisotropic roughness, energy compensation, and
+    the models' options."""
     from mi_brdfs.bsdfs import BY_NAME
     from mi_brdfs.bsdfs.microfacet import DISTRIBUTIONS, GEOMETRIES
     ct = {"type": "cook_torrance", "k": 0.2}
@@ -419,6 +420,8 @@ def degenerate_configs() -> list[dict]:
                if v or (d != "blinn" and g == "smith")]
             + [{"type": name, "energy_compensation": True}
                for name, cls in BY_NAME.items() if cls.compensable]
+            + [{**ct, "distribution": d, "alpha_u": 0.05, "alpha_v": 0.3, "sample_visible": v}
+               for d in ("beckmann", "ggx") for v in (True, False)]
             + [{"type": "ward", "alpha_u": 0.05, "alpha_v": 0.3, "formula": "angles"},
                {"type": "toon", "specular_model": "blinn", "smoothness": 0.2},
                {"type": "oren_nayar", "method": "table"}])

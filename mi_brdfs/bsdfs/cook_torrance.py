@@ -143,6 +143,11 @@ def pdf_lobe(wi, wo, alpha, distribution: str, visible: bool = True):
 #  The plugin
 # ----------------------------------------------------------------------------
 
+def roughness(tex, si, active, hi: float = mf.ALPHA_MAX):
+    """A roughness texture's value clamped to [ALPHA_MIN, hi]."""
+    return dr.fmin(dr.fmax(tex.eval_1(si, active), mf.ALPHA_MIN), hi)
+
+
 # Energy compensation (:mod:`.energy`): the single-scattering albedo of each
 # D x G with F = 1 and with F0 = 0 (E_ss is linear in F0) over (mu, alpha), and
 # the random walk's W over (mu, alpha, F0) of the Smith microsurfaces. alpha
@@ -212,11 +217,37 @@ class CookTorrance(BRDF):
               doc="the lecture's roughness ρ (<= 1 for ``blinn``); values below "
                   "``ALPHA_MIN`` = 1e-4 (0, the perfectly smooth surface, included) are "
                   "clamped to it, as Mitsuba and pbrt do, and values above ``ALPHA_MAX`` = "
-                  "1e6 to that (the lobe's limit: it reflects nothing by itself)."),
+                  "1e6 to that (the lobe's limit: it reflects nothing by itself). Giving it "
+                  "together with ``alpha_u`` or ``alpha_v`` is an error."),
+        Param("alpha_u", 0.3, 0.0, None, kind="scalar", role="shape", upper=1.0,
+              doc="anisotropic roughness along the tangent: Mitsuba's shading-frame ``s`` "
+                  "axis (local x, along dp/du), as ``roughconductor``'s ``alpha_u``; "
+                  "``beckmann`` and ``ggx`` only. Clamped to [``ALPHA_MIN``, "
+                  "``ALPHA_MAX_ANISOTROPIC`` = 1e4]."),
+        Param("alpha_v", 0.3, 0.0, None, kind="scalar", role="shape", upper=1.0,
+              doc="anisotropic roughness along the bitangent (local y), as "
+                  "``roughconductor``'s ``alpha_v``. Either one given sets the other to "
+                  "its default 0.3."),
     )
 
     def read(self, reader: Reader) -> None:
+        props = reader.props
+        self.anisotropic = "alpha_u" in props or "alpha_v" in props
+        if self.anisotropic:
+            if "alpha" in props:
+                raise reader.error("alpha", props["alpha"],
+                                   "either alpha or alpha_u/alpha_v, not both")
+            if self.options.distribution == "blinn":
+                name = "alpha_u" if "alpha_u" in props else "alpha_v"
+                raise reader.error(name, props[name], 'distribution "beckmann" or "ggx" '
+                                   "(Blinn's D is isotropic here: give alpha)")
+            if self.options.energy_compensation:
+                raise reader.error("energy_compensation", True, "false with alpha_u/alpha_v "
+                                   "(no anisotropic table yet)")
+        given = ("alpha_u", "alpha_v") if self.anisotropic else ("alpha",)
         for p in self.PARAMS:
+            if p.name.startswith("alpha") and p.name not in given:
+                continue
             if p.name == "alpha" and self.options.distribution == "blinn":
                 p = replace(p, hi=1.0)                       # Blinn: 2/rho² - 2 >= 0
             self.read_param(reader, p)
@@ -236,9 +267,14 @@ class CookTorrance(BRDF):
         return not (self.off("k", 1.0) or self.off("specular_reflectance"))
 
     def eval_textures(self, si, active):
-        return self.colours(si, active,
-                            alpha=dr.fmin(dr.fmax(self.m_alpha.eval_1(si, active),
-                                                  mf.ALPHA_MIN), mf.ALPHA_MAX))
+        # an anisotropic roughness is a pair (alpha_u, alpha_v): see .microfacet
+        if self.anisotropic:
+            hi = mf.ALPHA_MAX_ANISOTROPIC
+            alpha = (roughness(self.m_alpha_u, si, active, hi),
+                     roughness(self.m_alpha_v, si, active, hi))
+        else:
+            alpha = roughness(self.m_alpha, si, active)
+        return self.colours(si, active, alpha=alpha)
 
     def lobe_weights(self, inp):
         k = self.switch("k")
@@ -320,6 +356,17 @@ class CookTorrance(BRDF):
         chi2 += [Chi2({**conductor, "distribution": d, "alpha": a, "sample_visible": v}, (diagonal,),
                       phi=45.0, res=101, ires=16 if d == "beckmann" else 8)
                  for d in ("beckmann", "ggx") for v in (False, True) for a in (0.2, 0.05)]
+        # Anisotropic (alpha_u along s, alpha_v along t): Mitsuba's anisotropic
+        # roughconductor settings (alpha_u 0.2, alpha_v 0.05 at the diagonal viewer), and
+        # both orientations seen from azimuths off the axes, with a diffuse lobe beside.
+        chi2 += [Chi2({**conductor, "distribution": d, "alpha_u": 0.2, "alpha_v": 0.05,
+                       "sample_visible": v}, (diagonal,), phi=45.0, res=101,
+                      ires=16 if d == "beckmann" else 8, quick=(d, v) == ("ggx", True))
+                 for d in ("beckmann", "ggx") for v in (False, True)]
+        chi2 += [Chi2({**c, "distribution": d, "geometry": "smith", "alpha_u": au,
+                       "alpha_v": av, "k": 0.3, "sample_visible": v}, (0, 45, 85), phi=30.0)
+                 for d in ("beckmann", "ggx") for au, av in ((0.05, 0.4), (0.6, 0.1))
+                 for v in (True, False)]
         consistency = [{**c, "distribution": d, "geometry": g, "alpha": a, "k": k}
                        for d in mf.DISTRIBUTIONS for g in mf.GEOMETRIES
                        for a, k in ((0.1, 0.0), (0.5, 0.5), (1.0, 0.3))]
@@ -378,6 +425,21 @@ class CookTorrance(BRDF):
                       "energy_compensation": True}
                      for a in (0.0, 1.0, 1e3) for d in mf.DISTRIBUTIONS for g in mf.GEOMETRIES
                      if a <= 1.0 or d != "blinn"]
+        anisotropic = [{**c, "distribution": d, "geometry": g, "alpha_u": au, "alpha_v": av}
+                       for d in ("beckmann", "ggx") for g in mf.GEOMETRIES
+                       for au, av in ((0.05, 0.4), (0.7, 0.02))]
+        consistency += [{**a, "k": 0.3} for a in anisotropic]
+        consistency += [{**c, "distribution": d, "alpha_u": 0.1, "alpha_v": 0.5, "k": 0.2,
+                         "sample_visible": False} for d in ("beckmann", "ggx")]
+        furnace += [Furnace(f"{a['distribution']}, {a['geometry']}, α {a['alpha_u']} × "
+                            f"{a['alpha_v']}, F0 = 1, k = 0",
+                            {**a, "k": 0.0, "f0": 1.0, "specular_reflectance": 1.0},
+                            phis=(0.0, 45.0, 90.0)) for a in anisotropic]
+        extremes += [{**c, "distribution": d, "geometry": g, "alpha_u": au, "alpha_v": av,
+                      "k": k, "mode": mode}
+                     for d in ("beckmann", "ggx") for g in mf.GEOMETRIES
+                     for au, av in ((0.0, 1.0), (1e-4, 1e-4), (1.0, 0.0)) for k in (0.0, 0.5)
+                     for mode in ("hdr", "scanline")]
         return Cases(
             chi2=chi2, consistency=consistency, furnace=furnace, extremes=extremes,
             interior=[{**c, "distribution": d, "geometry": "smith", "alpha": 0.4, "k": 0.4,
@@ -385,7 +447,10 @@ class CookTorrance(BRDF):
                       for d in ("ggx", "blinn")]
             + [{**c, "distribution": "beckmann", "alpha": 0.4, "k": 0.4, "f0": 0.3,
                 "diffuse_reflectance": 0.5, "specular_reflectance": 0.7,
-                "energy_compensation": True}],
+                "energy_compensation": True}]
+            + [{**c, "distribution": d, "geometry": "smith", "alpha_u": 0.2, "alpha_v": 0.5,
+                "k": 0.4, "f0": 0.3, "diffuse_reflectance": 0.5, "specular_reflectance": 0.7}
+               for d in ("beckmann", "ggx")],
             negative=({**c, "distribution": "ggx", "k": 0.0, "alpha": 0.1},
                       {**c, "distribution": "ggx", "k": 0.0, "alpha": 0.105}, 45),
             lobe_width=0.35,
@@ -393,11 +458,16 @@ class CookTorrance(BRDF):
                          for d in mf.DISTRIBUTIONS for g in mf.GEOMETRIES]
             + [{**c, "distribution": d, "geometry": "smith", "alpha": 0.6, "k": 0.0,
                 "energy_compensation": True, "specular_reflectance": rgb([0.95, 0.64, 0.54])}
-               for d in mf.DISTRIBUTIONS],
+               for d in mf.DISTRIBUTIONS]
+            + [{**a, "k": 0.2} for a in anisotropic],
             lobe={**c, "distribution": "ggx", "alpha": 0.3, "k": 0.3, "f0": 0.5,
                   "diffuse_reflectance": 0.8},
             costs=[(f"cook_torrance {d} {g}", {**c, "distribution": d, "geometry": g, "alpha": 0.3})
-                   for d in mf.DISTRIBUTIONS for g in mf.GEOMETRIES],
+                   for d in mf.DISTRIBUTIONS for g in mf.GEOMETRIES]
+            + [(f"cook_torrance {d} smith anisotropic", {**c, "distribution": d,
+                                                         "geometry": "smith", "alpha_u": 0.1,
+                                                         "alpha_v": 0.3})
+               for d in ("beckmann", "ggx")],
             report_furnace=[
                 ("GGX, Smith, alpha = 1, k = 0, F0 = 1",
                  {**c, "distribution": "ggx", "geometry": "smith", "alpha": 1.0, "k": 0.0,
@@ -414,7 +484,11 @@ class CookTorrance(BRDF):
                         {"type": "roughconductor", "distribution": d, "alpha": 0.3},
                         floor={"type": "bench_floor_ggx", "alpha": 0.3} if d == "ggx" else None,
                         spread=(lambda t: {"alpha": 0.05 + 0.5 * t}) if d == "ggx" else None)
-                   for d in ("ggx", "beckmann")],
+                   for d in ("ggx", "beckmann")]
+            + [Twin("cook_torrance ggx anisotropic vs roughconductor ggx anisotropic",
+                    {**conductor, "distribution": "ggx", "alpha_u": 0.05, "alpha_v": 0.3},
+                    {"type": "roughconductor", "distribution": "ggx", "alpha_u": 0.05,
+                     "alpha_v": 0.3})],
             related=[("cook_torrance ggx k=0.5 vs roughplastic ggx",
                       {**c, "distribution": "ggx", "geometry": "smith", "k": 0.5, "alpha": 0.3},
                       {"type": "roughplastic", "distribution": "ggx", "alpha": 0.3})],
@@ -433,4 +507,6 @@ class CookTorrance(BRDF):
             pictures=Pictures("alpha", (0.05, 0.15, 0.4), {"distribution": "ggx",
                                                           "geometry": "smith", "k": 0.3}),
             mitsuba=("roughconductor", "roughplastic", "principled"),
+            checked="`roughconductor` (isotropic and anisotropic); `roughplastic` (× exact/Schlick "
+                    "Fresnel); the random walk on the microsurface",
         )

@@ -83,6 +83,40 @@ def _trade_targets() -> int:
     return len(dict.fromkeys(r["target"] for r in fits()))
 
 
+def _trade_best(prefix: str) -> dict[str, dict]:
+    """The best fit (lowest BRDF error) of each target whose spec starts with
+    ``prefix``."""
+    best = {}
+    for r in fits():
+        if r["target"].startswith(prefix) and ("error" not in r) and (
+                r["target"] not in best or r["brdf_error"] < best[r["target"]]["brdf_error"]):
+            best[r["target"]] = r
+    if not best:
+        raise ValueError(f"no committed fit of a target {prefix!r}")
+    return best
+
+
+def _trade_range(*prefixes: str) -> str:
+    """The lowest BRDF errors of these targets, from the smallest to the largest."""
+    errors = sorted(r["brdf_error"] for p in prefixes for r in _trade_best(p).values())
+    return f"{errors[0]:.2g}–{errors[-1]:.2g}"
+
+
+def _trade_fit(target: str, model: str | None = None) -> dict:
+    """One target's best fit, or its fit by ``model``."""
+    if model is None:
+        return _trade_best(target)[target]
+    return next(r for r in fits() if r["target"] == target and r["model"] == model)
+
+
+PLASTIC = "roughplastic:alpha=0.1,diffuse_reflectance=[0.6,0.2,0.1]"
+
+
+def _fit_models() -> int:
+    from mi_brdfs.tools.fit.models import all_models
+    return len(all_models())
+
+
 RESULTS = {
     "validation.checks": lambda: str(len(validation()["checks"])),
     "validation.pass": lambda: str(validation()["summary"]["pass"]),
@@ -96,6 +130,14 @@ RESULTS = {
     "trade.fits": lambda: str(len(fits())),
     "trade.targets": lambda: str(_trade_targets()),
     "trade.minutes": lambda: f"{bench()['group_seconds']['trade'] / 60:.0f} minutes",
+    "trade.models": lambda: str(_fit_models()),
+    "trade.gold_copper": lambda: _trade_range("roughconductor:material=Au",
+                                              "roughconductor:material=Cu"),
+    "trade.aluminium": lambda: _trade_range("roughconductor:material=Al"),
+    "trade.plastic.model": lambda: _trade_fit(PLASTIC)["model"],
+    "trade.plastic.error": lambda: f"{_trade_fit(PLASTIC)['brdf_error']:.2g}",
+    "trade.plastic.flip": lambda: f"{_trade_fit(PLASTIC)['image_flip']:.2f}",
+    "trade.plastic.lambert_flip": lambda: f"{_trade_fit(PLASTIC, 'lambert')['image_flip']:.2f}",
     "bench.machine": lambda: ", ".join(f"{k} {v}" for k, v in bench()["machine"].items()),
 }
 

@@ -247,6 +247,8 @@ def test_cli_page_is_sentences_with_exit_statuses(site):
     assert "3:" in plain(sections["compare"].split("Exit status", 1)[1])
     page = read(site, "cli.html")
     assert "tcp://host:8786" in page and 'href="tcp://' not in page
+    # flags stay flags: Sphinx's smart quotes would turn "--help" into "–help"
+    assert re.findall(r"[–—][a-z]", plain(article(page))) == []
 
 
 # ----------------------------------------------------------------------------

@@ -25,18 +25,20 @@ EXIT_STATUS = {
 }
 URL = re.compile(r"\b[a-z][a-z0-9+.-]*://[^\s),;]+")
 FLAG = re.compile(r"(?<![\w`-])--?[a-zA-Z][\w-]*")         # -D, --help: literals, not dashes
+# A command with its flag ("mi-brdfs COMMAND --help", "mitsuba -m"): one literal.
+COMMAND = re.compile(r"\b(?:mi-brdfs|mitsuba)(?: [A-Za-z]+){0,2} --?[a-zA-Z][\w-]*")
+LITERAL = re.compile("|".join(f"(?:{r.pattern})" for r in (URL, COMMAND, FLAG)))
 
 
 def sentence(text: str) -> str:
     """A help text as a sentence of reStructuredText: capitalised, with a full
-    stop, URLs and flags as literals (not links, not dashes), reST's special
-    characters escaped."""
+    stop, URLs, flags and commands as literals (not links, not dashes), reST's
+    special characters escaped."""
     text = " ".join((text or "").split())
     if not text:
         return ""
     text = text.replace("\\", "\\\\").replace("*", "\\*").replace("`", "\\`").replace("|", "\\|")
-    text = URL.sub(lambda m: f"``{m.group(0)}``", text)
-    text = FLAG.sub(lambda m: f"``{m.group(0)}``", text)
+    text = LITERAL.sub(lambda m: f"``{m.group(0)}``", text)
     text = text[0].upper() + text[1:]
     return text if text.endswith((".", "?", "!", ".)")) else text + "."
 

@@ -343,8 +343,8 @@ def parser() -> Parser:
                    help="exposure of .png/.jpg outputs in stops (EV)")
     r.set_defaults(run=cmd_render)
 
-    s = sub.add_parser("scenes", parents=[common(threads=False)], help="list the bundled scenes")
-    s.set_defaults(run=cmd_scenes)
+    s = sub.add_parser("scenes", help="list the bundled scenes")
+    s.set_defaults(run=cmd_scenes, traceback=False)
 
     c = sub.add_parser("compare", parents=[common(threads=False)],
                        help="compare renders (EXR, PNG, JPEG) against a reference; HTML report")

@@ -351,7 +351,7 @@ PUBLIC = {"mi_brdfs.register", "mi_brdfs.scenes.names", "mi_brdfs.scenes.path",
           "mi_brdfs.render.passes.render_passes", "mi_brdfs.render.frozen.FrozenRender",
           "mi_brdfs.render.frozen.GradientStep", "mi_brdfs.render.tonemap.tonemap",
           "mi_brdfs.render.tonemap.to_srgb8", "mi_brdfs.render.tonemap.write_png",
-          "mi_brdfs.render.output.write", "mi_brdfs.render.exr.write_exr",
+          "mi_brdfs.render.imagefile.write", "mi_brdfs.render.exr.write_exr",
           "mi_brdfs.render.exr.read_exr", "mi_brdfs.tools.compare.compare",
           "mi_brdfs.tools.validate.validate", "mi_brdfs.tools.bench.run",
           "mi_brdfs.tools.fit.fit"}

@@ -2,11 +2,14 @@
 
 Build (the ``docs`` extra: ``pip install -e '.[docs]'``)::
 
-    python -m sphinx -W -b html docs docs/_build/html
+    python -m sphinx -W -b html docs OUT
 
-The plugin reference, the command-line reference and the benchmark results
-are generated from the code and the committed results at every build
-(``docs/_ext/mi_brdfs_docs.py``, into ``docs/_generated``).
+The plugin reference (with its renders), the command-line reference and the
+results pages are generated from the code and the committed results at every
+build (``docs/_ext``), into Sphinx's cache folder in OUT: the build writes
+nothing into the source tree. Formulas are rendered by the MathJax that
+``sphinx-mathjax-offline`` ships, copied into the site: no page loads anything
+from the network.
 """
 import os
 import sys
@@ -26,19 +29,22 @@ extensions = [
     "myst_parser",
     "sphinx.ext.autodoc",
     "sphinx.ext.mathjax",
+    "sphinx-mathjax-offline",      # MathJax from the site itself (sets mathjax_path)
     "mi_brdfs_docs",
 ]
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
 myst_enable_extensions = ["dollarmath", "colon_fence"]
 myst_heading_anchors = 3
-exclude_patterns = ["_build", "benchmarks/**", "validation/**", "notebooks/**",
+exclude_patterns = ["_build", "_generated", "benchmarks/**", "validation/**", "notebooks/**",
                     "Thumbs.db", ".DS_Store"]
 
+# The API page lists what it names (docs/api.rst), nothing more: no default
+# "members" that would add every helper of a module.
 autodoc_member_order = "bysource"
-autodoc_default_options = {"members": True, "undoc-members": False}
+autodoc_default_options = {}
 autodoc_typehints = "description"
 nitpicky = False
 
 html_theme = "furo"
 html_title = "mi_brdfs"
-html_static_path = []
+html_static_path = ["_static"]

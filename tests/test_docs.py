@@ -1,49 +1,113 @@
-"""The documentation site: it builds with warnings as errors (the README's
-command), each plugin page names every parameter and option of its plugin,
-and the command-line page every command and every option of its parser."""
+"""The documentation site, built once as the README says (warnings are errors):
+the build leaves the source tree untouched; each plugin page names every
+parameter and option, loads its Python example as written, shows renders that
+vary its main parameter; the command-line page covers every command and
+option in sentences, with exit statuses; the results pages and guides read
+their figures from the committed results; the API page lists the public API
+only; no page body names a repository path. Then every page in Chromium with
+the network off: no request leaves the machine, no image is missing, nothing
+overflows at 1280 px, the formulas are typeset."""
 from __future__ import annotations
 
 import argparse
+import glob
 import html
+import json
 import os
 import re
 import subprocess
 import sys
+from dataclasses import dataclass
 
+import numpy as np
 import pytest
 
 from mi_brdfs.bsdfs import PLUGINS
+from mi_brdfs.bsdfs.cases import ALL
 from mi_brdfs.tools import cli
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+DOCS = os.path.join(ROOT, "docs")
+UNTRACKED = {".git", ".venv", "__pycache__", ".pytest_cache", "mi_brdfs.egg-info"}
+
+
+@dataclass
+class Build:
+    out: str
+    changed: list[str]          # files of the source tree the build created or modified
+
+
+def tree_state() -> dict[str, tuple[int, int]]:
+    """Every file of the checkout (but Git's, the venv's and caches): mtime, size."""
+    state = {}
+    for folder, subfolders, files in os.walk(ROOT):
+        subfolders[:] = [d for d in subfolders if d not in UNTRACKED]
+        for name in files:
+            path = os.path.join(folder, name)
+            st = os.stat(path)
+            state[path] = (st.st_mtime_ns, st.st_size)
+    return state
 
 
 @pytest.fixture(scope="module")
-def site(tmp_path_factory) -> str:
+def build(tmp_path_factory) -> Build:
     out = str(tmp_path_factory.mktemp("site"))
-    run = subprocess.run([sys.executable, "-m", "sphinx", "-W", "-q", "-b", "html",
-                          os.path.join(ROOT, "docs"), out], capture_output=True, text=True)
+    before = tree_state()
+    run = subprocess.run([sys.executable, "-m", "sphinx", "-W", "-q", "-b", "html", DOCS, out],
+                         capture_output=True, text=True)
     assert run.returncode == 0, run.stderr[-4000:]
-    return out
+    after = tree_state()
+    return Build(out, sorted(p for p in after if before.get(p) != after[p]))
+
+
+@pytest.fixture(scope="module")
+def site(build) -> str:
+    return build.out
+
+
+def read(site: str, page: str) -> str:
+    with open(os.path.join(site, page), encoding="utf-8") as f:
+        return f.read()
+
+
+def plain(fragment: str) -> str:
+    return " ".join(html.unescape(re.sub(r"<[^>]+>", " ", fragment)).split())
 
 
 def text_of(site: str, page: str) -> str:
-    with open(os.path.join(site, page), encoding="utf-8") as f:
-        return html.unescape(re.sub(r"<[^>]+>", " ", f.read()))
+    return plain(read(site, page))
 
+
+def article(page_html: str) -> str:
+    match = re.search(r"<article[^>]*>(.*)</article>", page_html, re.S)
+    return match.group(1) if match else page_html
+
+
+def pages(site: str) -> list[str]:
+    """Every HTML page of the site, the copied reports included."""
+    return sorted(os.path.relpath(p, site) for p in glob.glob(os.path.join(site, "**", "*.html"),
+                                                              recursive=True)
+                  if "/_sources/" not in p)
+
+
+def test_the_build_writes_nothing_into_the_source_tree(build):
+    assert build.changed == []
+
+
+# ----------------------------------------------------------------------------
+#  Plugin pages
+# ----------------------------------------------------------------------------
 
 def table_names(site: str, page: str) -> set[str]:
     """The names in the first column of the page's parameter table (code literals)."""
-    with open(os.path.join(site, page), encoding="utf-8") as f:
-        page_html = f.read()
-    table = page_html.split("<table", 1)[1].split("</table>", 1)[0]
+    table = read(site, page).split("<table", 1)[1].split("</table>", 1)[0]
     rows = re.findall(r"<tr[^>]*>\s*<td[^>]*>(.*?)</td>", table, flags=re.S)
     return {html.unescape(re.sub(r"<[^>]+>", "", r)).strip() for r in rows}
 
 
 @pytest.mark.parametrize("cls", PLUGINS, ids=lambda c: c.name)
 def test_plugin_page_names_every_parameter_and_option(site, cls):
-    names = table_names(site, f"_generated/plugins/{cls.name}.html")
+    names = table_names(site, f"plugins/{cls.name}.html")
     declared = {p.name for p in cls.PARAMS} | {o.name for o in cls.all_options()}
     assert declared <= names, f"missing from the page's table: {sorted(declared - names)}"
 
@@ -55,17 +119,90 @@ def test_help_shows_the_module_documentation(cls):
     site's build), and every parameter and option says what it is."""
     doc = cls.__doc__
     assert doc.lstrip().startswith(f"``{cls.name}``") and ".. code-block:: xml" in doc
+    assert ".. math::" in doc, "the formulas of eval as math"
     for item in cls.PARAMS + cls.all_options():
         assert len(" ".join(item.doc.split())) > 20, item.name
 
 
-def test_plugin_pages_show_renders_and_lobes(site):
-    for cls in PLUGINS:
-        page = open(os.path.join(site, f"_generated/plugins/{cls.name}.html"),
-                    encoding="utf-8").read()
-        for picture in (f"{cls.name}_scanline.png", f"{cls.name}_hdr.png", f"lobe_{cls.name}.png"):
-            assert picture in page, (cls.name, picture)
-            assert os.path.exists(os.path.join(site, "_images", picture)), picture
+def code_blocks(page_html: str) -> list[str]:
+    return [html.unescape(re.sub(r"<[^>]+>", "", b))
+            for b in re.findall(r"<pre[^>]*>(.*?)</pre>", page_html, flags=re.S)]
+
+
+@pytest.mark.parametrize("cls", PLUGINS, ids=lambda c: c.name)
+def test_python_example_loads_the_xml_example(site, cls):
+    """The page's Python dictionary, run as written, loads the same BSDF as
+    its XML example read by Mitsuba's own parser."""
+    import mitsuba as mi
+    blocks = code_blocks(read(site, f"plugins/{cls.name}.html"))
+    xml = next(b for b in blocks if b.lstrip().startswith(f'<bsdf type="{cls.name}"'))
+    xml = xml[:xml.index("</bsdf>") + len("</bsdf>")].replace("<bsdf ", '<bsdf version="3.0.0" ', 1)
+    python = next(b for b in blocks if "mi.load_dict(" in b)
+    namespace = {}
+    exec(compile(python, f"{cls.name} page", "exec"), namespace)
+    ours = mi.traverse(namespace["bsdf"])
+    reference = mi.traverse(mi.load_string(xml))
+    assert set(ours.keys()) == set(reference.keys())
+    for key in reference.keys():
+        np.testing.assert_array_equal(np.array(ours[key]), np.array(reference[key]), err_msg=key)
+    assert type(namespace["bsdf"]).__name__ == type(mi.load_string(xml)).__name__
+
+
+def preview_images(site: str, cls) -> dict[tuple[str, str], np.ndarray]:
+    """The page's renders by (mode, value), read from the built site."""
+    import mitsuba as mi
+    page = read(site, f"plugins/{cls.name}.html")
+    found = {}
+    param = ALL[cls.name].pictures.parameter
+    for tag in re.findall(r"<img[^>]*>", page):
+        attrs = dict(re.findall(r'(\w+)="([^"]*)"', tag))
+        match = re.fullmatch(rf"{cls.name}, (\w+), {param} = (\S+)", html.unescape(attrs["alt"]))
+        if match:
+            path = os.path.normpath(os.path.join(site, "plugins", attrs["src"]))
+            found[match.groups()] = np.array(mi.Bitmap(path), dtype=np.float64)
+    return found
+
+
+@pytest.mark.parametrize("cls", PLUGINS, ids=lambda c: c.name)
+def test_plugin_page_renders_vary_its_main_parameter(site, cls):
+    """Both modes at every value of the model's pictures, captioned with the
+    value; each value and each mode gives a different image."""
+    pictures = ALL[cls.name].pictures
+    assert pictures is not None, "a model declares the renders of its page"
+    images = preview_images(site, cls)
+    values = [f"{v:g}" for v in pictures.values]
+    assert set(images) == {(m, v) for m in ("scanline", "hdr") for v in values}
+    page = text_of(site, f"plugins/{cls.name}.html")
+    for v in values:
+        assert f"{pictures.parameter} = {v}" in page
+    def differ(a, b) -> bool:          # a highlight (8 % of the 8-bit range) or the shading
+        d = np.abs(a - b)              # (same seed: an unused parameter gives 0 and 0)
+        return d.max() > 20 or d.mean() > 1
+    for mode in ("scanline", "hdr"):
+        for a, b in zip(values, values[1:]):
+            assert differ(images[mode, a], images[mode, b]), (mode, a, b)
+    assert differ(images["scanline", values[0]], images["hdr", values[0]])
+
+
+@pytest.mark.parametrize("cls", PLUGINS, ids=lambda c: c.name)
+def test_plugin_page_has_notes_links_lobes_and_scene(site, cls):
+    page = read(site, f"plugins/{cls.name}.html")
+    text = plain(page)
+    assert "One-sided" in text and "depolarizer" in text and "Modes" in text
+    for name in ALL[cls.name].mitsuba:
+        assert f'plugins_bsdfs.html#bsdf-{name}"' in page, name
+    for picture in (f"{cls.name}_scanline.png", f"{cls.name}_hdr.png", f"lobe_{cls.name}.png"):
+        assert picture in page, picture
+        assert os.path.exists(os.path.join(site, "_images", picture)), picture
+
+
+# ----------------------------------------------------------------------------
+#  The command line
+# ----------------------------------------------------------------------------
+
+def commands() -> dict[str, argparse.ArgumentParser]:
+    top = cli.parser()
+    return next(a for a in top._actions if isinstance(a, argparse._SubParsersAction)).choices
 
 
 def _options(parser: argparse.ArgumentParser) -> list[str]:
@@ -74,29 +211,265 @@ def _options(parser: argparse.ArgumentParser) -> list[str]:
 
 
 def test_cli_page_covers_every_command_and_option(site):
-    page = text_of(site, "_generated/cli.html")
-    top = cli.parser()
-    commands = next(a for a in top._actions if isinstance(a, argparse._SubParsersAction))
-    for name, sub in commands.choices.items():
+    page = text_of(site, "cli.html")
+    for name, sub in commands().items():
         assert f"mi-brdfs {name}" in page, name
         for option in _options(sub):
             assert option in page, (name, option)
 
 
 def test_every_cli_argument_is_explained():
-    """The reference is generated from the help strings: none may be missing."""
-    top = cli.parser()
-    commands = next(a for a in top._actions if isinstance(a, argparse._SubParsersAction))
-    missing = [(name, a.dest) for name, sub in commands.choices.items() for a in sub._actions
+    """The reference is generated from the help strings: none may be missing,
+    and none is dead (``scenes`` takes no option but ``--help``)."""
+    missing = [(name, a.dest) for name, sub in commands().items() for a in sub._actions
                if not isinstance(a, argparse._HelpAction) and not a.help]
     assert not missing
+    assert _options(commands()["scenes"]) == []
+
+
+def cli_sections(site: str) -> dict[str, str]:
+    page = article(read(site, "cli.html"))
+    parts = re.split(r"<section id=\"mi-brdfs-([a-z]+)\">", page)
+    return dict(zip(parts[1::2], parts[2::2]))
+
+
+def test_cli_page_is_sentences_with_exit_statuses(site):
+    sections = cli_sections(site)
+    assert set(sections) == set(commands())
+    for name, section in sections.items():
+        cells = re.findall(r"<tr[^>]*>\s*<td[^>]*>.*?</td>\s*<td[^>]*>(.*?)</td>", section, re.S)
+        for cell in cells:
+            text = plain(cell)
+            assert text[0].isupper() and text.endswith("."), (name, text)
+        statuses = plain(section.split("Exit status", 1)[1])
+        assert "1:" in statuses or name == "scenes", name
+        assert ("130:" in statuses) == (name != "explore"), name
+    assert "3:" in plain(sections["compare"].split("Exit status", 1)[1])
+    page = read(site, "cli.html")
+    assert "tcp://host:8786" in page and 'href="tcp://' not in page
+    # flags stay flags: Sphinx's smart quotes would turn "--help" into "–help"
+    assert re.findall(r"[–—][a-z]", plain(article(page))) == []
+
+
+# ----------------------------------------------------------------------------
+#  Figures read from the committed results; the reports on the site
+# ----------------------------------------------------------------------------
+
+def committed(*path: str):
+    with open(os.path.join(DOCS, *path), encoding="utf-8") as f:
+        return json.load(f)
+
+
+def test_validation_figures_are_the_committed_report(site):
+    report = committed("validation", "results.json")
+    s = report["summary"]
+    expected = (f"{len(report['checks'])} checks, {s['pass']} pass, {s['documented']} documented "
+                f"behaviour, {s['known']} documented known limitation, {s['fail']} fail "
+                f"({report['seconds']:.0f} s")
+    for page in ("guide/validation.html", "results/validation.html"):
+        text = text_of(site, page)
+        assert str(len(report["checks"])) in text
+    guide = text_of(site, "guide/validation.html")
+    assert expected in guide
+    assert f"every one of the {len(report['sampling'])} χ² tests passes" in guide
+    results = text_of(site, "results/validation.html")
+    for check in report["checks"]:
+        if check["status"] != "pass":
+            assert check["reason"].split()[0] in results, check["id"]
+
+
+def test_fit_table_is_the_committed_sweep(site):
+    records = committed("benchmarks", "trade", "fits.json")
+    targets = list(dict.fromkeys(r["target"] for r in records))
+    for page in ("guide/fit.html", "results/fit.html"):
+        tables = article(read(site, page)).split("<table")[1:]
+        table = next(t for t in tables if "cost ×" in t).split("</table>", 1)[0]
+        header = re.findall(r"<th[ >]", table)
+        assert len(header) == len(targets) + 2, page
+        rows = re.findall(r"<tr[^>]*>(.*?)</tr>", table, re.S)[1:]
+        assert len(rows) == len(dict.fromkeys(r["model"] for r in records))
+        first = records[0]
+        assert f"{first['brdf_error']:.3f} · {first['image_flip']:.2f}" in plain(rows[0]), page
+    assert f"{len(records)} fits" in text_of(site, "guide/fit.html")
+
+
+def test_fit_guide_figures_are_the_committed_sweep(site):
+    """The figures of the fit guide's prose: the lowest BRDF error per
+    material, found here from the committed records."""
+    records = [r for r in committed("benchmarks", "trade", "fits.json") if "error" not in r]
+    lowest: dict[str, dict] = {}
+    for r in records:
+        if r["target"] not in lowest or r["brdf_error"] < lowest[r["target"]]["brdf_error"]:
+            lowest[r["target"]] = r
+
+    def span(*metals: str) -> str:
+        errors = [r["brdf_error"] for t, r in lowest.items()
+                  if any(f"material={m}," in t for m in metals)]
+        return f"{min(errors):.2g}–{max(errors):.2g}"
+
+    plastic = next(r for t, r in lowest.items() if t.startswith("roughplastic:alpha=0.1,"))
+    lambert = next(r for r in records if r["target"] == plastic["target"]
+                   and r["model"] == "lambert")
+    guide = text_of(site, "guide/fit.html")
+    assert f"{span('Au', 'Cu')} at best (aluminium, nearly grey: {span('Al')})" in guide
+    assert (f"{plastic['model']}, has BRDF error {plastic['brdf_error']:.2g}" in guide)
+    assert (f"FLIP {plastic['image_flip']:.2f} against {lambert['image_flip']:.2f}" in guide)
+    models = len(dict.fromkeys(r["model"] for r in records))
+    assert f"+ec ): {models} models" in guide
+
+
+def test_reports_are_pages_of_the_site_with_their_pictures(site):
+    for name, guide in (("validation", "guide/validation.html"), ("trade", "results/fit.html")):
+        report = os.path.join(site, "reports", name, "index.html")
+        pictures = re.findall(r"src=['\"]?([^'\" >]+)", read(site, report))
+        assert pictures, name
+        for picture in pictures:
+            assert os.path.exists(os.path.join(site, "reports", name, picture)), picture
+    assert 'href="../reports/validation/index.html"' in read(site, "guide/validation.html")
+    assert 'href="../reports/trade/index.html"' in read(site, "results/fit.html")
+    assert "/results/fit" in read(site, "guide/fit.html").replace(".html", "").replace("..", "")
+    assert "_downloads" not in read(site, "guide/validation.html")
 
 
 def test_benchmark_results_page_is_the_committed_run(site):
-    import json
-    with open(os.path.join(ROOT, "docs", "benchmarks", "results.json")) as f:
-        results = json.load(f)
-    page = text_of(site, "_generated/benchmarks.html")
+    results = committed("benchmarks", "results.json")
+    page = text_of(site, "results/benchmarks.html")
     for group in results["groups"]:
         assert group in page
     assert f"{results['seconds']:.0f} s" in page
+
+
+# ----------------------------------------------------------------------------
+#  The API page; repository paths
+# ----------------------------------------------------------------------------
+
+PUBLIC = {"mi_brdfs.register", "mi_brdfs.scenes.names", "mi_brdfs.scenes.path",
+          "mi_brdfs.bsdfs.base.BRDF", "mi_brdfs.bsdfs.params.Param",
+          "mi_brdfs.bsdfs.params.Option", "mi_brdfs.bsdfs.params.ParameterError",
+          "mi_brdfs.bsdfs.params.DeclarationError", "mi_brdfs.bsdfs.model.Model",
+          *(f"mi_brdfs.bsdfs.cases.{c}" for c in ("Cases", "Chi2", "Furnace", "Twin", "Pictures")),
+          "mi_brdfs.render.passes.render_passes", "mi_brdfs.render.frozen.FrozenRender",
+          "mi_brdfs.render.frozen.GradientStep", "mi_brdfs.render.tonemap.tonemap",
+          "mi_brdfs.render.tonemap.to_srgb8", "mi_brdfs.render.tonemap.write_png",
+          "mi_brdfs.render.imagefile.write", "mi_brdfs.render.exr.write_exr",
+          "mi_brdfs.render.exr.read_exr", "mi_brdfs.tools.compare.compare",
+          "mi_brdfs.tools.validate.validate", "mi_brdfs.tools.bench.run",
+          "mi_brdfs.tools.fit.fit"}
+
+
+def test_api_page_lists_the_public_api_only(site):
+    ids = set(re.findall(r'<dt class="sig sig-object py" id="([^"]+)"', read(site, "api.html")))
+    extra = {i for i in ids - PUBLIC if not i.startswith("mi_brdfs.bsdfs.model.Model.")}
+    assert not extra, sorted(extra)
+    assert PUBLIC <= ids, sorted(PUBLIC - ids)
+
+
+PATH = re.compile(r"(?<![\w.:/-])(?:mi_brdfs|tests|docs|scenes|notebooks)/[\w./*-]*")
+ABOUT_THE_REPOSITORY = {"layout.html", "contributing.html"}    # pages that describe it
+
+
+def repository_paths(page_html: str) -> set[str]:
+    """Paths in the page's prose: outside code blocks; a code literal counts
+    when it is a bare path (a command that contains one does not)."""
+    body = re.sub(r"<pre.*?</pre>", " ", article(page_html), flags=re.S)
+
+    def literal(match):
+        inner = plain(match.group(1))
+        return " " if " " in inner else f" {inner} "
+    body = re.sub(r"<code[^>]*>(.*?)</code>", literal, body, flags=re.S)
+    return set(PATH.findall(plain(body)))
+
+
+def test_no_repository_paths_in_page_bodies(site):
+    found = {page: repository_paths(read(site, page)) for page in pages(site)
+             if not page.startswith(("reports/", "_")) and page not in ABOUT_THE_REPOSITORY}
+    assert not {p: sorted(v) for p, v in found.items() if v}
+    assert repository_paths("<article><p>see tests/test_docs.py</p></article>")   # the check bites
+
+
+# ----------------------------------------------------------------------------
+#  In Chromium, offline
+# ----------------------------------------------------------------------------
+
+WIDTH = 1280
+SCREENSHOTS = {"landing": "index.html", "plugin": "plugins/cook_torrance.html",
+               "guide": "guide/fit.html"}
+WIDE_TABLES = """() => [...document.querySelectorAll('article table')].map(t => {
+    let box = t.parentElement, scrolls = false;
+    for (; box && box.tagName !== 'ARTICLE'; box = box.parentElement)
+        if (['auto', 'scroll'].includes(getComputedStyle(box).overflowX)
+            && box.scrollWidth > box.clientWidth) scrolls = true;
+    return {wide: t.getBoundingClientRect().width > t.closest('article').clientWidth + 1,
+            scrolls: scrolls};
+})"""
+
+
+@pytest.fixture(scope="module")
+def browsed(site, tmp_path_factory):
+    """Every page of the site at 1280 px in the system's Chromium, every
+    request outside the site's files refused and recorded."""
+    pytest.importorskip("playwright")
+    from mi_brdfs.tools.explore.browser import chromium
+    shots = tmp_path_factory.mktemp("screenshots")
+    outside, seen = [], {}
+
+    def route(r):
+        if r.request.url.startswith(("file://", "data:")):
+            r.continue_()
+        else:
+            outside.append(r.request.url)
+            r.abort()
+    with chromium(permissions=()) as context:
+        context.route("**/*", route)
+        page = context.new_page()
+        page.set_viewport_size({"width": WIDTH, "height": 900})
+        for name in pages(site):
+            page.goto("file://" + os.path.join(site, name), wait_until="load")
+            page.evaluate("() => window.MathJax && MathJax.startup && MathJax.startup.promise")
+            seen[name] = page.evaluate("""() => ({
+                width: document.documentElement.scrollWidth, view: innerWidth,
+                missing: [...document.images].filter(i => !i.complete || !i.naturalWidth)
+                                             .map(i => i.src),
+                math: document.querySelectorAll('mjx-container').length,
+                text: document.body.innerText})""")
+            seen[name]["tables"] = page.evaluate(WIDE_TABLES)
+            for shot, target in SCREENSHOTS.items():
+                if name == target:
+                    page.screenshot(path=str(shots / f"{shot}.png"), full_page=True)
+    return seen, outside, shots
+
+
+def test_site_in_chromium_loads_nothing_from_the_network(browsed):
+    seen, outside, _ = browsed
+    assert len(seen) > 30 and not outside, outside[:5]
+
+
+def test_site_in_chromium_has_every_image(browsed):
+    seen, _, _ = browsed
+    assert {p: s["missing"] for p, s in seen.items() if s["missing"]} == {}
+    assert len(seen["plugins/cook_torrance.html"]["text"]) > 1000
+
+
+def test_site_in_chromium_fits_1280_px(browsed):
+    """No page is wider than the window; a table wider than the text scrolls
+    in its own box (the fit table, 13 columns, is one)."""
+    seen, _, _ = browsed
+    assert {p: s["width"] for p, s in seen.items() if s["width"] > s["view"]} == {}
+    clipped = {p: s["tables"] for p, s in seen.items()
+               if any(t["wide"] and not t["scrolls"] for t in s["tables"])}
+    assert clipped == {}
+    assert any(t["wide"] and t["scrolls"] for t in seen["guide/fit.html"]["tables"])
+
+
+def test_site_in_chromium_typesets_the_formulas(browsed):
+    seen, _, _ = browsed
+    for cls in PLUGINS:
+        page = seen[f"plugins/{cls.name}.html"]
+        assert page["math"] >= 1 and "\\frac" not in page["text"] \
+            and "\\operatorname" not in page["text"], cls.name
+
+
+def test_site_screenshots(browsed):
+    _, _, shots = browsed
+    for shot in SCREENSHOTS:
+        assert os.path.getsize(shots / f"{shot}.png") > 20_000, shot

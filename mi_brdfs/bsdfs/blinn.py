@@ -1,16 +1,19 @@
-"""
+r"""
 ``blinn`` — Lambert diffuse + Blinn(-Phong) specular reflection
 ================================================================
 
 .. parameters::
 
 With w_r the viewer (``si.wi``), d the light (``wo``), n the normal and the
-half vector h = normalize(d + w_r), ``eval`` returns::
+half vector h = normalize(d + w_r), ``eval`` returns
 
-    scanline:  clamp01(m_D · clamp(d·n)) + clamp01(m_S · clamp(n·h)^gamma)
-    hdr:       (m_D / pi + m_S · N(gamma) · clamp(n·h)^gamma) · (d·n)
+.. math::
 
-    N(gamma) = (gamma + 2)(gamma + 4) / (8 pi (2^(-gamma/2) + gamma))
+    \text{scanline:}\quad &\operatorname{clamp}_{[0,1]}\big(m_D \max(0, d\cdot n)\big)
+        + \operatorname{clamp}_{[0,1]}\big(m_S \max(0, n\cdot h)^\gamma\big) \\
+    \text{hdr:}\quad &\Big(\frac{m_D}{\pi} + m_S\,N(\gamma)\max(0, n\cdot h)^\gamma\Big)
+        \,(d\cdot n), \qquad
+    N(\gamma) = \frac{(\gamma + 2)(\gamma + 4)}{8\pi\,(2^{-\gamma/2} + \gamma)}
 
 The scanline form is the lecture's, each lobe clamped per colour channel to
 [0, 1]. The hdr form is reciprocal (h is symmetric in d and w_r).
@@ -28,7 +31,7 @@ sin(theta_o) d(theta_o) = -4c dc, so
 
 Away from the normal the albedo decreases monotonically (the lobe, mapped from
 half vectors to light directions by dw_o = 4 (d·h) dw_h, is squeezed and cut
-by the horizon; measured by the furnace test, tests/bsdfs/test_blinn.py), so with
+by the horizon; measured by the project's white-furnace test of Blinn), so with
 m_D + m_S <= 1 the surface never reflects more than it receives. At gamma = 0,
 N = 1/pi and the lobe is Lambert's; for large gamma N ~ (gamma + 6)/(8 pi).
 The popular (gamma + 8)/(8 pi) exceeds N for every gamma > 0 (their ratio minus

@@ -29,7 +29,7 @@ linear in F0). This g holds both of what single scattering loses: the light
 of bounces k >= 2 and, for the separable Smith G1(ω_i) G1(ω_o), the energy
 it loses beyond the real (height-correlated) microsurface's single scattering,
 1 / (1 + Λ_i + Λ_o) >= G1 G1 (measured by ``python -m mi_brdfs.tools.groundtruth
---decomposition``: see ``docs/guide/energy.md``). For the Blinn D and the V-cavity G,
+--decomposition``: see the documentation's energy guide). For the Blinn D and the V-cavity G,
 whose microsurfaces have no random walk, W is that of the nearest Smith
 microsurface (Beckmann at the same α for Blinn, whose exponent 2/α² - 2 is
 Walter's mapping; the same D with Smith's G for the V-cavity).

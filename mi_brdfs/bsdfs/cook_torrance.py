@@ -1,15 +1,19 @@
-"""
+r"""
 ``cook_torrance`` — Cook-Torrance: Lambert diffuse + microfacet specular
 =========================================================================
 
 .. parameters::
 
 With w_r the viewer (``si.wi``), d the light (``wo``), h = normalize(d + w_r),
-and D, G, F as in :mod:`mi_brdfs.bsdfs.microfacet`, ``eval`` returns::
+and D, G, F as in :mod:`mi_brdfs.bsdfs.microfacet`, ``eval`` returns
 
-    scanline:  k · clamp01(m_D · clamp(d·n))
-               + (1 - k) · clamp01(m_S · D F G / (4 clamp(w_r·n)))
-    hdr:       (k · m_D / pi + (1 - k) · m_S · D F G / (4 (w_r·n)(d·n))) · (d·n)
+.. math::
+
+    \text{scanline:}\quad &k\,\operatorname{clamp}_{[0,1]}\big(m_D \max(0, d\cdot n)\big)
+        + (1 - k)\,\operatorname{clamp}_{[0,1]}\Big(m_S\,
+          \frac{D\,F\,G}{4 \max(0, \omega_r\cdot n)}\Big) \\
+    \text{hdr:}\quad &\Big(k\,\frac{m_D}{\pi}
+        + (1 - k)\,m_S\,\frac{D\,F\,G}{4\,(\omega_r\cdot n)(d\cdot n)}\Big)\,(d\cdot n)
 
 The scanline form is the lecture's, per lobe and colour channel clamped to
 [0, 1]: not energy conserving, on purpose. The hdr form is the radiometric
@@ -30,7 +34,7 @@ Dachsbacher 2016) with Schlick's F at every bounce, tabulated over
 (cos θ, α, F0) for every α (to ∞): the specular lobe reflects m_S·W(θ, α, F0),
 W the walk's albedo (within 1.4 % for GGX and 2.0 % for Beckmann with Smith
 G; Blinn's D and the V-cavity against the walk of the nearest Smith
-microsurface, see ``docs/guide/energy.md``). A white surface (F0 = 1,
+microsurface: the documentation's energy guide). A white surface (F0 = 1,
 m_S = 1; and m_D = 1 if k > 0) reflects 1 at every angle, and m_S scales it
 linearly, as ``roughconductor``'s ``specular_reflectance``; with k > 0 the
 albedo is k·m_D + (1 - k)·(the compensated specular).

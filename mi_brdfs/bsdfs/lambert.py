@@ -1,14 +1,19 @@
-"""
+r"""
 ``lambert`` — Lambert diffuse reflection
 =========================================
 
 .. parameters::
 
 The lecture's BRDF for scan-line rendering, with d the light direction (``wo``)
-and n the normal, returned as is by ``eval`` (it carries the cosine already)::
+and n the normal, returned as is by ``eval`` (it carries the cosine already);
+in hdr mode the radiometric Lambert BRDF, times the cosine Mitsuba's ``eval``
+includes:
 
-    scanline:  f_r = clamp01(m_D · clamp(d·n))
-    hdr:       f_r = m_D / pi,   eval = m_D / pi · cos(theta_o)
+.. math::
+
+    \text{scanline:}\quad \texttt{eval} &= f_r =
+        \operatorname{clamp}_{[0,1]}\big(m_D \max(0, d\cdot n)\big) \\
+    \text{hdr:}\quad \texttt{eval} &= f_r \cos\theta_o, \qquad f_r = \frac{m_D}{\pi}
 
 Sampling: cosine-weighted hemisphere. With ``reflectance`` 0 (a constant, not
 differentiated, never updated) the plugin has no lobe at all. A viewer or light below the surface gets no reflection.

@@ -1,21 +1,30 @@
-"""
+r"""
 ``oren_nayar`` — Oren-Nayar rough diffuse reflection
 ====================================================
 
 .. parameters::
 
 With d the light (``wo``), ω_r the viewer (``si.wi``) and n the normal, the
-lecture's model::
+lecture's model
 
-    θ_i = acos(d·n),   θ_r = acos(ω_r·n),   α = max(θ_i, θ_r),   β = min(θ_i, θ_r)
-    A = 1 - 0.5 σ²/(σ² + 0.33),   B = 0.45 σ²/(σ² + 0.09)
-    v_i = normalize(d - (d·n) n),   v_r = normalize(ω_r - (ω_r·n) n)
-    G = max(0, v_i·v_r)
+.. math::
 
-and ``eval`` returns::
+    \theta_i &= \arccos(d\cdot n), \quad \theta_r = \arccos(\omega_r\cdot n), \quad
+        \alpha = \max(\theta_i, \theta_r), \quad \beta = \min(\theta_i, \theta_r) \\
+    A &= 1 - 0.5\,\frac{\sigma^2}{\sigma^2 + 0.33}, \quad
+        B = 0.45\,\frac{\sigma^2}{\sigma^2 + 0.09} \\
+    v_i &= \operatorname{normalize}\big(d - (d\cdot n)\,n\big), \quad
+        v_r = \operatorname{normalize}\big(\omega_r - (\omega_r\cdot n)\,n\big), \quad
+        G = \max(0, v_i\cdot v_r)
 
-    scanline:  f_r = clamp01(m_D · clamp(d·n) · (A + B G sin α tan β))
-    hdr:       f_r = m_D/π · (A + B G sin α tan β),   eval = f_r · cos θ_o
+and ``eval`` returns
+
+.. math::
+
+    \text{scanline:}\quad \texttt{eval} &= f_r = \operatorname{clamp}_{[0,1]}\big(
+        m_D \max(0, d\cdot n)\,(A + B\,G \sin\alpha \tan\beta)\big) \\
+    \text{hdr:}\quad \texttt{eval} &= f_r \cos\theta_o, \qquad
+        f_r = \frac{m_D}{\pi}\,(A + B\,G \sin\alpha \tan\beta)
 
 (scanline: the lecture's L(A + B G sin α tan β) with L = m_D·clamp(d·n),
 clamped per channel to [0, 1]; hdr: the same divided by π and unclamped, i.e.
@@ -46,7 +55,7 @@ p = q = 0 (tan 90°); that node holds the value of its neighbours (cos β =
 both directions graze the surface (there T = sin α sin β / max(p, q) has a
 kink along p = q whose slope grows as 1/max(p, q)), and near the normal it
 falls only as sqrt(h) (the sqrt(1 - cos²) in sin α and tan β).
-``tests/bsdfs/test_oren_nayar.py`` prints it; at the default 64 nodes, σ = π/2,
+The project's Oren-Nayar test prints it; at the default 64 nodes, σ = π/2,
 m_D = 1 (hdr eval <= 0.32): RMS 2e-4 over the hemisphere, at most 0.003 (3 %)
 where both cosines are >= 0.1, 0.04 where both directions graze. (The table buys nothing on a CPU: sin α tan β is also
 sqrt(1-p²)·sqrt(1-q²)/max(p, q) without acos; it is the lecture's GPU trick.)

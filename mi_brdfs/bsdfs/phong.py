@@ -1,14 +1,18 @@
-"""
+r"""
 ``phong`` — Lambert diffuse + Phong specular reflection
 =======================================================
 
 .. parameters::
 
 With w_r the viewer (``si.wi``), d the light (``wo``), n the normal and the
-light's mirror direction r = 2 (d·n) n - d, cos(alpha) = w_r·r, ``eval`` returns::
+light's mirror direction r = 2 (d·n) n - d, cos(alpha) = w_r·r, ``eval`` returns
 
-    scanline:  clamp01(m_D · clamp(d·n)) + clamp01(m_S · clamp(w_r·r)^gamma)
-    hdr:       (m_D / pi + m_S · (gamma + 2) / (2 pi) · clamp(w_r·r)^gamma) · (d·n)
+.. math::
+
+    \text{scanline:}\quad &\operatorname{clamp}_{[0,1]}\big(m_D \max(0, d\cdot n)\big)
+        + \operatorname{clamp}_{[0,1]}\big(m_S \max(0, \omega_r\cdot r)^\gamma\big) \\
+    \text{hdr:}\quad &\Big(\frac{m_D}{\pi} + m_S\,\frac{\gamma + 2}{2\pi}
+        \max(0, \omega_r\cdot r)^\gamma\Big)\,(d\cdot n)
 
 The scanline form is the lecture's, each lobe clamped per colour channel to
 [0, 1]; like the lecture's Phong term it does not carry clamp(d·n). The hdr
@@ -17,7 +21,7 @@ Willems 1994): at normal incidence r = n and alpha = theta_o, so the specular
 albedo is m_S (gamma+2)/(2 pi) · integral cos^gamma(theta) cos(theta) dw = m_S
 exactly, and it only decreases towards grazing incidence (the lobe tilts away
 from the normal and the horizon cuts it; about m_S cos(theta_i) for narrow
-lobes, measured by the furnace test in tests/bsdfs/test_phong.py): with
+lobes, measured by the project's white-furnace test of Phong): with
 m_D + m_S <= 1 the surface never reflects more than it receives. w_r·r = d·r' (r' the viewer's mirror
 direction) is symmetric in d and w_r, so the hdr BRDF is reciprocal.
 

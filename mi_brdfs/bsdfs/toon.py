@@ -1,19 +1,29 @@
-"""
+r"""
 ``toon`` — toon (cel) shading: stepped diffuse and specular colours
 ===================================================================
 
 .. parameters::
 
 The lecture's model, with d the light (``wo``), ω_r the viewer (``si.wi``), n
-the normal and c = ω_r·r (phong) or n·h (blinn)::
+the normal and c = ω_r·r (phong) or n·h (blinn)
 
-    f_diffuse  = m_D1 if d·n >= t_D else m_D2          (every d, lights behind included)
-    f_specular = m_S1 if c >= t_S else m_S2            (d·n > 0; 0 for lights behind)
+.. math::
 
-and ``eval`` returns::
+    f_\text{diffuse} &= \begin{cases} m_{D1} & d\cdot n \ge t_D \\
+                                      m_{D2} & \text{otherwise (lights behind included)}
+                        \end{cases} \qquad
+    f_\text{specular} = \begin{cases} m_{S1} & c \ge t_S \\
+                                       m_{S2} & \text{otherwise}
+                         \end{cases}
+        \quad (d\cdot n > 0;\ 0 \text{ for lights behind})
 
-    scanline:  clamp01(f_diffuse) + clamp01(f_specular)
-    hdr:       (f_diffuse + f_specular) / (2 pi)
+and ``eval`` returns
+
+.. math::
+
+    \text{scanline:}\quad &\operatorname{clamp}_{[0,1]}(f_\text{diffuse})
+        + \operatorname{clamp}_{[0,1]}(f_\text{specular}) \\
+    \text{hdr:}\quad &\frac{f_\text{diffuse} + f_\text{specular}}{2\pi}
 
 The toon colours are already the shaded result (they replace Lambert's
 m_D·clamp(d·n)), so there is no cos θ_o factor in either mode. The hdr mode

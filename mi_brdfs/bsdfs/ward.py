@@ -1,4 +1,4 @@
-"""
+r"""
 ``ward`` — Ward: Lambert diffuse + anisotropic Gaussian specular
 ================================================================
 
@@ -12,26 +12,35 @@ keeps its default).
 
 With w_r the viewer (``si.wi``), d the light (``wo``), n, t, b the shading
 frame (z, x, y) and h the half vector of d and w_r, the lecture's specular
-term, in its dot-product form::
+term, in its dot-product form
 
-    f_s = m_S · exp(-((h·t / a_t)² + (h·b / a_b)²) / (h·n)²)
-              / (4 pi a_t a_b sqrt((w_r·n) / (d·n)))
+.. math::
 
-and in its angle form (delta: angle of h with n, phi: angle of h's projection
-on the tb-plane with t; theta_i of the light, theta_r of the viewer)::
+    f_s = m_S\,\frac{\exp\!\Big(-\big((h\cdot t / a_t)^2 + (h\cdot b / a_b)^2\big)
+                     / (h\cdot n)^2\Big)}
+               {4\pi\,a_t a_b \sqrt{(\omega_r\cdot n) / (d\cdot n)}}
 
-    f_s = m_S · exp(-tan²delta (cos²phi / a_t² + sin²phi / a_b²))
-              / (4 pi a_t a_b sqrt(cos theta_i cos theta_r)) · cos theta_i
+and in its angle form (δ: angle of h with n, φ: angle of h's projection on the
+tb-plane with t; θ_i of the light, θ_r of the viewer)
 
-(h need not be normalised: the exponent is a ratio.) ``eval`` returns::
+.. math::
 
-    scanline:  clamp01(m_D · clamp(d·n)) + clamp01(f_s)
-    hdr:       m_D / pi · (d·n) + f_s
+    f_s = m_S\,\frac{\exp\!\big(-\tan^2\delta\,(\cos^2\phi / a_t^2
+                                               + \sin^2\phi / a_b^2)\big)}
+               {4\pi\,a_t a_b \sqrt{\cos\theta_i \cos\theta_r}}\,\cos\theta_i
+
+(h need not be normalised: the exponent is a ratio.) ``eval`` returns
+
+.. math::
+
+    \text{scanline:}\quad &\operatorname{clamp}_{[0,1]}\big(m_D \max(0, d\cdot n)\big)
+        + \operatorname{clamp}_{[0,1]}(f_s) \\
+    \text{hdr:}\quad &\frac{m_D}{\pi}\,(d\cdot n) + f_s
 
 f_s is already the radiometric Ward BRDF times cos theta_o = d·n,
 m_S exp(...) / (4 pi a_t a_b sqrt((w_r·n)(d·n))) · (d·n), so the hdr mode is the
 same value unclamped; it is reciprocal. Its directional albedo (measured and
-printed by tests/bsdfs/test_ward.py, m_S = 1) is at most 1 up to 89 deg for
+printed by the project's Ward test, m_S = 1) is at most 1 up to 89 deg for
 alpha <= 0.5 (0.99 at normal incidence for alpha = 0.05, 0.59 for 0.5) and
 falls roughly as cos(theta_r) for narrow lobes; the 1/sqrt(w_r·n) factor then
 makes it diverge as C/sqrt(cos theta_r) within a fraction of a degree of the
@@ -43,14 +52,18 @@ Sampling: cosine hemisphere for the diffuse lobe; for the specular lobe
 Walter's (2005, "Notes on the Ward BRDF") half-vector sampling. With
 psi = 2 pi u_1 and s = sqrt(-log(1 - u_2)) (1 - u_2 > 0: no log of 0),
 
-    h = normalize(a_t s cos psi, a_b s sin psi, 1),
+.. math::
+
+    h = \operatorname{normalize}(a_t\, s \cos\psi,\; a_b\, s \sin\psi,\; 1),
 
 i.e. tan phi_h = (a_b / a_t) tan psi in the quadrant of psi and
 tan²delta = -log(1 - u_2) / (cos²phi_h / a_t² + sin²phi_h / a_b²). Its density
 over half vectors is (phi has density 1 / (2 pi a_t a_b A(phi)), and given phi,
-tan²delta is exponential with rate A(phi) = cos²phi/a_t² + sin²phi/a_b²)::
+tan²delta is exponential with rate A(phi) = cos²phi/a_t² + sin²phi/a_b²)
 
-    p_h(h) = exp(-tan²delta A(phi)) / (pi a_t a_b cos³delta),
+.. math::
+
+    p_h(h) = \frac{\exp\!\big(-\tan^2\delta\; A(\phi)\big)}{\pi\, a_t a_b \cos^3\delta},
 
 and wo = reflect(w_r, h) has p(wo) = p_h(h) / (4 wo·h). The lobe is picked in
 proportion to mean(m_D) (pi·mean(m_D) in scanline mode) vs mean(m_S).

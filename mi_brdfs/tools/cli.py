@@ -19,7 +19,7 @@ scenes`` lists them), loads it with its ``-D`` defaults (as ``mitsuba -D``),
 renders the spp in passes with different seeds (Mitsuba's JIT variants report
 no progress of their own) and averages them, with a progress bar on a
 terminal and plain lines in a pipe. Each ``-o`` is written by its extension
-(:mod:`mi_brdfs.render.output`): ``.exr`` keeps every film channel and the
+(:mod:`mi_brdfs.render.imagefile`): ``.exr`` keeps every film channel and the
 render's metadata, ``.png``/``.jpg`` are tone-mapped 8-bit sRGB. Without
 ``-o`` the output is ``SCENE.exr`` beside the scene file, as ``mitsuba``
 writes it (a bundled scene's: in the current folder).
@@ -41,7 +41,7 @@ from importlib import metadata
 from typing import NoReturn
 
 from .. import _interrupt as interrupt
-from ..render import output, tonemap
+from ..render import imagefile, tonemap
 from . import outputs
 from .arguments import info_logger, integer, real, set_threads, set_variant, set_verbosity
 from .errors import CLIError, one_line
@@ -159,7 +159,7 @@ def cmd_render(args: argparse.Namespace) -> int:
         check_bundled_defines(args.scene, defines)
     targets = args.output or [default_output(scene_path, bundled)]
     for path in targets:
-        output.check_extension(path)
+        imagefile.check_extension(path)
         outputs.check_output_file(path)
     if args.tonemap not in tonemap.OPERATORS:
         raise CLIError(f"--tonemap {args.tonemap} is unknown; valid: {', '.join(tonemap.OPERATORS)}")
@@ -195,15 +195,15 @@ def cmd_render(args: argparse.Namespace) -> int:
         progress.close()
     seconds = time.perf_counter() - start
     try:
-        names = output.channel_names(film_channel_names(scene), image.shape[2])
+        names = imagefile.channel_names(film_channel_names(scene), image.shape[2])
     except Exception:                       # a film without a bitmap: generic names
-        names = output.channel_names([], image.shape[2])
+        names = imagefile.channel_names([], image.shape[2])
     info = {"scene": os.path.abspath(scene_path), "spp": sum(chunks), "seed": args.seed,
             "passes": len(chunks), "pass_spp": ",".join(map(str, chunks)), "variant": variant,
             "defines": " ".join(f"{k}={v}" for k, v in defines.items()),
             **versions()}
     for path in targets:
-        output.write(path, image, names, info, args.tonemap, args.exposure)
+        imagefile.write(path, image, names, info, args.tonemap, args.exposure)
     print(f"{args.scene}: {image.shape[1]}x{image.shape[0]}, {spp} spp in {seconds:.1f} s -> "
           f"{', '.join(targets)}")
     return 0
@@ -343,8 +343,8 @@ def parser() -> Parser:
                    help="exposure of .png/.jpg outputs in stops (EV)")
     r.set_defaults(run=cmd_render)
 
-    s = sub.add_parser("scenes", parents=[common(threads=False)], help="list the bundled scenes")
-    s.set_defaults(run=cmd_scenes)
+    s = sub.add_parser("scenes", help="list the bundled scenes")
+    s.set_defaults(run=cmd_scenes, traceback=False)
 
     c = sub.add_parser("compare", parents=[common(threads=False)],
                        help="compare renders (EXR, PNG, JPEG) against a reference; HTML report")

@@ -10,7 +10,7 @@ import numpy as np
 import OpenEXR
 import pytest
 
-from mi_brdfs.render import output
+from mi_brdfs.render import imagefile
 from mi_brdfs.tools import cli, progress
 
 SCENES = Path(__file__).resolve().parents[2] / "scenes"
@@ -77,17 +77,17 @@ def test_metadata_records_the_passes_that_ran(tmp_path, spp, passes, ran):
 
 def test_channel_names_of_mitsubas_aov_integrator():
     film = ["R", "G", "B", "img.R", "img.G", "img.B", "img.A", "dd.y.T", "nn.X", "nn.Y", "nn.Z"]
-    assert output.channel_names(film, 7) == ["R", "G", "B", "dd.y.T", "nn.X", "nn.Y", "nn.Z"]
-    assert output.channel_names(["R", "G", "B", "dd.y.T"], 1) == ["dd.y.T"]   # no nested image
+    assert imagefile.channel_names(film, 7) == ["R", "G", "B", "dd.y.T", "nn.X", "nn.Y", "nn.Z"]
+    assert imagefile.channel_names(["R", "G", "B", "dd.y.T"], 1) == ["dd.y.T"]   # no nested image
     mono = ["Y", "img.R", "img.G", "img.B", "img.A", "dd.y.T", "nn.X", "nn.Y", "nn.Z"]
-    assert output.channel_names(mono, 5) == ["Y", "dd.y.T", "nn.X", "nn.Y", "nn.Z"]
-    assert output.channel_names(["R", "G", "B"], 3) == ["R", "G", "B"]
-    assert output.channel_names(["R", "G", "B"], 5) == ["C0", "C1", "C2", "C3", "C4"]
+    assert imagefile.channel_names(mono, 5) == ["Y", "dd.y.T", "nn.X", "nn.Y", "nn.Z"]
+    assert imagefile.channel_names(["R", "G", "B"], 3) == ["R", "G", "B"]
+    assert imagefile.channel_names(["R", "G", "B"], 5) == ["C0", "C1", "C2", "C3", "C4"]
 
 
 def test_png_of_a_render_without_colour_is_refused():
     with pytest.raises(ValueError, match="no R, G, B channels"):
-        output.rgb_of(np.zeros((2, 2, 1)), ["dd.y.T"])
+        imagefile.rgb_of(np.zeros((2, 2, 1)), ["dd.y.T"])
 
 
 def test_default_output_is_beside_the_scene(tmp_path):

@@ -1,0 +1,243 @@
+"""The plugin pages: one per registered plugin, generated from its module.
+
+A page is the module's docstring (its ``.. parameters::`` line replaced by the
+table made from ``PARAMS`` and the options), then what follows from the
+declarations: the XML example as a Python dictionary, notes, the renders that
+vary its main parameter (:mod:`docs_previews`), the related Mitsuba plugins,
+its lobe plot (from the committed validation report) and its bundled scene.
+"""
+from __future__ import annotations
+
+import inspect
+import os
+import textwrap
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import docs_previews
+
+DOCS = Path(__file__).resolve().parent.parent
+ROOT = DOCS.parent
+PARAMETERS = ".. parameters::"     # the line of a model's docstring that becomes its table
+FORMS = {"spectrum": "float, rgb, spectrum or texture", "scalar": "float or texture",
+         "float": "float"}
+MITSUBA_DOCS = "https://mitsuba.readthedocs.io/en/stable/src/generated/plugins_bsdfs.html"
+
+
+# ----------------------------------------------------------------------------
+#  The parameter table, from the declarations
+# ----------------------------------------------------------------------------
+
+def _range(lo, hi) -> str:
+    if lo is not None and hi is not None:
+        return f" in [{lo:g}, {hi:g}]"
+    if lo is not None:
+        return f" >= {lo:g}"
+    return f" <= {hi:g}" if hi is not None else ""
+
+
+def _row(name: str, kind: str, doc: str, default: str) -> list[str]:
+    lines = textwrap.wrap(" ".join(doc.split()), 66) or [""]
+    return [f"   * - ``{name}``", f"     - {kind}", f"     - {lines[0]}",
+            *(f"       {line}" for line in lines[1:]), f"     - {default}"]
+
+
+def parameter_table(cls) -> str:
+    """The reStructuredText table of a plugin's parameters and options, made
+    from its declarations (``PARAMS``, the model's ``OPTIONS``, then the
+    base's): the one source of the plugin's parameter documentation."""
+    rows = [".. list-table::", "   :header-rows: 1", "   :widths: 20 20 50 10", "",
+            "   * - Parameter", "     - Type", "     - Description", "     - Default"]
+    for p in cls.PARAMS:
+        kind = FORMS[p.kind] + _range(p.lo, p.hi) + " (∂)"
+        rows += _row(p.name, kind, p.doc, "none" if p.optional else f"{p.default:g}")
+    for o in cls.OPTIONS + tuple(o for o in cls.all_options() if o not in cls.OPTIONS):
+        doc = o.doc
+        if isinstance(o.default, bool):
+            kind, default = "boolean", str(o.default).lower()
+        elif isinstance(o.default, int):
+            kind, default = "integer" + _range(o.lo, o.hi), str(o.default)
+        else:
+            kind, default = "string", f'``"{o.default}"``'
+            doc += " One of " + ", ".join(f'``"{c}"``' for c in o.choices) + "."
+        rows += _row(o.name, kind, doc, default)
+    return "\n".join(rows)
+
+
+# ----------------------------------------------------------------------------
+#  The Python example, from the XML example
+# ----------------------------------------------------------------------------
+
+def xml_example(doc: str) -> str:
+    """The first ``<bsdf>`` element of the docstring's first XML code block."""
+    block = doc.split(".. code-block:: xml", 1)[1]
+    lines = []
+    for line in block.splitlines()[1:]:
+        if line.strip() and not line.startswith(" "):
+            break
+        lines.append(line)
+    text = textwrap.dedent("\n".join(lines))
+    return text[:text.index("</bsdf>") + len("</bsdf>")].strip()
+
+
+def _number(text: str):
+    value = float(text)
+    return int(value) if value.is_integer() and "." not in text and "e" not in text else value
+
+
+def plugin_dict(element: ET.Element) -> dict:
+    """A Mitsuba XML plugin element as the dictionary ``mi.load_dict`` reads:
+    ``float``, ``integer``, ``boolean``, ``string``, ``rgb`` and nested plugins
+    (textures) by name."""
+    d = {"type": element.get("type")}
+    for child in element:
+        name, value = child.get("name"), child.get("value")
+        if child.tag == "float":
+            d[name] = float(value)
+        elif child.tag == "integer":
+            d[name] = int(value)
+        elif child.tag == "boolean":
+            d[name] = value.strip().lower() == "true"
+        elif child.tag == "string":
+            d[name] = value
+        elif child.tag == "rgb":
+            d[name] = {"type": "rgb", "value": [float(v) for v in value.replace(",", " ").split()]}
+        elif child.tag in ("texture", "bsdf"):
+            d[name] = plugin_dict(child)
+        else:
+            raise ValueError(f"the XML example's <{child.tag}> has no dictionary form here")
+    return d
+
+
+def _source(value, indent: int) -> str:
+    if isinstance(value, dict):
+        pad = " " * (indent + 4)
+        items = [f"{pad}{k!r}: {_source(v, indent + 4)}," for k, v in value.items()]
+        return "{\n" + "\n".join(items) + "\n" + " " * indent + "}"
+    return repr(value)
+
+
+def python_example(xml: str) -> str:
+    """Python code that loads the XML example's BSDF as a dictionary."""
+    d = plugin_dict(ET.fromstring(xml))
+    return ("import mi_brdfs          # first: sets up LLVM, registers the plugins\n"
+            "import mitsuba as mi\n\n"
+            f"bsdf = mi.load_dict({_source(d, 0)})\n").replace("'", '"')
+
+
+# ----------------------------------------------------------------------------
+#  The page
+# ----------------------------------------------------------------------------
+
+def _image(path: Path, srcdir: Path, alt: str, width: str | None = None) -> list[str]:
+    """An image directive for a file anywhere (relative to the source folder)."""
+    lines = [f".. image:: /{os.path.relpath(path, srcdir)}", f"   :alt: {alt}"]
+    return lines + ([f"   :width: {width}"] if width else [])
+
+
+def notes(cls, pictures) -> list[str]:
+    from mi_brdfs.bsdfs.base import MODE
+    lines = ["Notes", "-----", "",
+             "- **Modes** (``mode``): " + " ".join(MODE.doc.split()),
+             "- **One-sided**, as Mitsuba's own reflection models: a viewer below the "
+             "surface (behind its shading normal) gets no reflection. Wrap the plugin in "
+             "Mitsuba's ``twosided`` for a surface seen from both sides.",
+             "- **Variants**: the plugin loads in every variant of the Mitsuba wheel "
+             "(``mi_brdfs.register()`` after ``mi.set_variant(...)``); in the polarized "
+             "variants it is a depolarizer, as Mitsuba's ``diffuse``.",
+             "- **Differentiable**: every parameter marked ∂ is exposed by ``mi.traverse`` "
+             "and can be updated and differentiated; options are fixed at load time."]
+    if pictures is not None:
+        param = next((p for p in cls.PARAMS if p.name == pictures.parameter), None)
+        if param is not None:
+            lines.append(f"- **{pictures.parameter}**, varied in the renders below: "
+                         + " ".join(param.doc.split()))
+    return lines + [""]
+
+
+def renders_section(cls, work: Path, srcdir: Path) -> list[str]:
+    from mi_brdfs.bsdfs.cases import ALL, label
+    pictures = ALL[cls.name].pictures
+    made = docs_previews.renders(cls, work / "previews")
+    if not made:
+        return []
+    values = list(pictures.values)
+    rest = label(pictures.config) if pictures.config else "defaults"
+    lines = ["Renders", "-------", "",
+             f"``{pictures.parameter}`` from {values[0]:g} to {values[-1]:g}, the other "
+             f"parameters: {rest}. Rendered by this site's build "
+             f"({docs_previews.RES}² pixels): in scan-line mode (top row) "
+             f"{docs_previews.LIGHTS['scanline']}; in hdr mode (bottom row) "
+             f"{docs_previews.LIGHTS['hdr']}.", "",
+             ".. list-table::", "   :class: renders", "   :header-rows: 1",
+             "   :stub-columns: 1", "",
+             "   * - mode"]
+    lines += [f"     - ``{pictures.parameter}`` = {v:g}" for v in values]
+    for mode in ("scanline", "hdr"):
+        lines.append(f"   * - {mode}")
+        for r in (r for r in made if r.mode == mode):
+            image = _image(r.path, srcdir, f"{cls.name}, {mode}, {pictures.parameter} = "
+                           f"{r.value:g}")
+            lines += ["     - " + image[0], *("       " + line for line in image[1:])]
+    return lines + [""]
+
+
+def mitsuba_section(cls) -> list[str]:
+    from mi_brdfs.bsdfs.cases import ALL
+    related = ALL[cls.name].mitsuba
+    if not related:
+        return []
+    links = ", ".join(f"`{name} <{MITSUBA_DOCS}#bsdf-{name}>`__" for name in related)
+    return ["Related Mitsuba plugins", "-----------------------", "",
+            f"In Mitsuba's plugin reference: {links}.", ""]
+
+
+def page(cls, work: Path, srcdir: Path) -> str:
+    from mi_brdfs.bsdfs.cases import ALL
+    module = inspect.getmodule(cls)
+    name = cls.name
+    doc = inspect.getdoc(module).strip()
+    parts = [f".. _plugin-{name}:", "", doc.replace(PARAMETERS, parameter_table(cls)), "",
+             "The same BSDF from Python, as a dictionary:", "",
+             ".. code-block:: python", "",
+             textwrap.indent(python_example(xml_example(doc)), "    "), ""]
+    parts += notes(cls, ALL[name].pictures)
+    parts += renders_section(cls, work, srcdir)
+    parts += mitsuba_section(cls)
+    lobe = DOCS / "validation" / f"lobe_{name}.png"
+    if lobe.exists():
+        parts += ["Lobes", "-----", "",
+                  "Polar plots of ``eval`` in the plane of incidence, both modes (from the "
+                  ":doc:`validation report </results/validation>`):", "",
+                  *_image(lobe, srcdir, f"{name} lobes"), ""]
+    scene = ROOT / "scenes" / f"{name}.xml"
+    if scene.exists():
+        parts += ["Bundled scene", "-------------", "",
+                  f"``mi-brdfs render {name}`` renders it; from Python, "
+                  f"``mi.load_file(mi_brdfs.scenes.path(\"{name}\"))``. Scan-line mode "
+                  f"(``-D mode=scanline``) on the left, hdr mode on the right:", ""]
+        renders = [ROOT / "scenes" / "renders" / f"{name}_{mode}.png" for mode in ("scanline", "hdr")]
+        if all(r.exists() for r in renders):
+            parts += [".. list-table::", "   :class: renders", ""]
+            for i, (r, mode) in enumerate(zip(renders, ("scanline", "hdr"))):
+                image = _image(r, srcdir, f"{name}, {mode}")
+                parts += [("   * - " if i == 0 else "     - ") + image[0],
+                          *("       " + line for line in image[1:])]
+            parts.append("")
+        parts += [f".. literalinclude:: /{os.path.relpath(scene, srcdir)}",
+                  "   :language: xml", ""]
+    return "\n".join(parts)
+
+
+def pages(work: Path, srcdir: Path) -> dict[str, tuple[str, str]]:
+    """docname -> (suffix, text) of the plugin pages and their index."""
+    from mi_brdfs.bsdfs import PLUGINS
+    out = {f"plugins/{cls.name}": (".rst", page(cls, work, srcdir)) for cls in PLUGINS}
+    index = ["BSDF plugins", "============", "",
+             "One page per plugin, in the lecture's order (diffuse models, then glossy "
+             "ones), generated from the plugin's module: its parameter declarations, its "
+             "formulas and its examples; the renders are made by this site's build.", "",
+             ".. toctree::", "   :maxdepth: 1", "", *(f"   {cls.name}" for cls in PLUGINS), ""]
+    out["plugins/index"] = (".rst", "\n".join(index))
+    return out
+

@@ -1,4 +1,4 @@
-"""
+r"""
 ``ashikhmin_shirley`` — Ashikhmin-Shirley: anisotropic Phong specular + coupled diffuse
 ========================================================================================
 
@@ -10,22 +10,28 @@ about the normal in half-vector space, with Schlick's Fresnel (R_s its value
 at normal incidence), and a diffuse term that takes only what the specular
 layer lets through. With k_1 = w_r the viewer (``si.wi``), k_2 = d the light
 (``wo``), n, u, v the shading frame (z, x, y), h = normalize(k_1 + k_2) and
-k the direction of either (k·h = k_1·h = k_2·h), the paper's BRDF is::
+k the direction of either (k·h = k_1·h = k_2·h), the paper's BRDF is
 
-    rho_s = sqrt((n_u + 1)(n_v + 1)) / (8 pi)
-            · (h·n)^((n_u (h·u)² + n_v (h·v)²) / (1 - (h·n)²))
-            / ((k·h) · max(k_1·n, k_2·n)) · F(k·h)
-    F(k·h) = R_s + (1 - R_s) (1 - k·h)^5
-    rho_d = 28 R_d / (23 pi) · (1 - R_s)
-            · (1 - (1 - (k_1·n)/2)^5) · (1 - (1 - (k_2·n)/2)^5)
+.. math::
+
+    \rho_s &= \frac{\sqrt{(n_u + 1)(n_v + 1)}}{8\pi}\,
+        \frac{(h\cdot n)^{\big(n_u (h\cdot u)^2 + n_v (h\cdot v)^2\big) / \big(1 - (h\cdot n)^2\big)}}
+             {(k\cdot h)\,\max(k_1\cdot n,\; k_2\cdot n)}\,F(k\cdot h) \\
+    F(k\cdot h) &= R_s + (1 - R_s)\,(1 - k\cdot h)^5 \\
+    \rho_d &= \frac{28 R_d}{23\pi}\,(1 - R_s)
+        \Big(1 - \big(1 - \tfrac{k_1\cdot n}{2}\big)^5\Big)
+        \Big(1 - \big(1 - \tfrac{k_2\cdot n}{2}\big)^5\Big)
 
 ``eval`` returns, each lobe clamped per colour channel to [0, 1] in scanline
 mode (the lecture's convention, as ``ward`` and ``cook_torrance``: the diffuse
 term without its 1/pi, as the lecture's m_D·clamp(d·n); the specular one the
-BRDF times d·n, as the lecture's Ward and Cook-Torrance terms)::
+BRDF times d·n, as the lecture's Ward and Cook-Torrance terms)
 
-    scanline:  clamp01(pi · rho_d · (d·n)) + clamp01(rho_s · (d·n))
-    hdr:       (rho_d + rho_s) · (d·n)
+.. math::
+
+    \text{scanline:}\quad &\operatorname{clamp}_{[0,1]}\big(\pi\,\rho_d\,(d\cdot n)\big)
+        + \operatorname{clamp}_{[0,1]}\big(\rho_s\,(d\cdot n)\big) \\
+    \text{hdr:}\quad &(\rho_d + \rho_s)\,(d\cdot n)
 
 Both terms are symmetric in k_1 and k_2: the hdr BRDF is reciprocal. The
 exponent of h·n is the anisotropic Phong exponent n_u cos²phi_h + n_v sin²phi_h
@@ -39,10 +45,13 @@ Sampling: cosine hemisphere for the diffuse lobe; for the specular lobe the
 paper's half-vector sampling: with psi = 2 pi u_1, the azimuth phi_h in the
 quadrant of psi with tan phi_h = sqrt((n_u + 1)/(n_v + 1)) tan psi, then
 cos theta_h = (1 - u_2)^(1 / (n_u cos²phi_h + n_v sin²phi_h + 1)), and
-d = reflect(w_r, h). Densities (the paper's)::
+d = reflect(w_r, h). Densities (the paper's)
 
-    p_h(h) = sqrt((n_u + 1)(n_v + 1)) / (2 pi) · (h·n)^(n_u cos²phi_h + n_v sin²phi_h)
-    p(d)   = p_h(h) / (4 (k·h))
+.. math::
+
+    p_h(h) &= \frac{\sqrt{(n_u + 1)(n_v + 1)}}{2\pi}\,
+        (h\cdot n)^{n_u \cos^2\phi_h + n_v \sin^2\phi_h} \\
+    p(d) &= \frac{p_h(h)}{4\,(k\cdot h)}
 
 Samples below the surface are discarded (the pdf over the hemisphere
 integrates to less than 1). rho_s · (d·n) / p(d) = F(k·h) · min(1, (d·n)/(w_r·n))

@@ -60,7 +60,7 @@ ERRORS = {
     "bad tonemap": (lambda t: ["render", str(SCENES / "lambert.xml"), "--png", str(t / "a.png"),
                                "--tonemap", "drago"], "argument --tonemap: invalid choice: 'drago'"),
     "scene is a folder": (lambda t: ["render", str(t)], "is a folder"),
-    "unknown scene name": (lambda t: ["render", "nosuchscene"], "bundled scenes: blinn, cook_torrance, course"),
+    "unknown scene name": (lambda t: ["render", "nosuchscene"], "blinn, cook_torrance, course"),
 }
 
 
@@ -103,5 +103,5 @@ def test_scenes_path_from_python():
     found = mi_brdfs.scenes.path("course")
     assert os.path.isabs(found) and found == mi_brdfs.scenes.path("course.xml")
     assert Path(found).read_text() == (SCENES / "course.xml").read_text()
-    with pytest.raises(ValueError, match="no bundled scene 'nope'; bundled scenes: blinn, "):
+    with pytest.raises(ValueError, match="no bundled scene 'nope'; bundled scenes: .*blinn, "):
         mi_brdfs.scenes.path("nope")

@@ -2,7 +2,8 @@
 
 - the models, in the lecture's order: :mod:`.lambert`, :mod:`.oren_nayar`,
   :mod:`.toon` (diffuse), :mod:`.phong`, :mod:`.blinn`, :mod:`.ward`,
-  :mod:`.cook_torrance` (specular); each declares what runs of it
+  :mod:`.cook_torrance` (specular), and beside them :mod:`.ashikhmin_shirley`
+  (anisotropic Phong, Ashikhmin & Shirley 2000); each declares what runs of it
   (:mod:`.cases`). What a model supplies: :mod:`.model`;
 - what every plugin does alike: :mod:`.base` (the ``mi.BSDF`` glue),
   :mod:`.params` (declaring, reading and checking parameters), :mod:`.lobes`

@@ -112,6 +112,8 @@ class Cases:
     # --- the documentation ---------------------------------------------------------------
     pictures: Pictures | None = None
     mitsuba: tuple[str, ...] = ()        # Mitsuba's related plugins (links on the page)
+    checked: str = ""                    # what it is checked against beyond the battery
+                                         # (the README's table, Markdown)
 
 
 def rgb(c) -> dict:

@@ -558,4 +558,6 @@ class CookTorrance(BRDF):
             pictures=Pictures("alpha", (0.05, 0.15, 0.4), {"distribution": "ggx",
                                                           "geometry": "smith", "k": 0.3}),
             mitsuba=("roughconductor", "roughplastic", "principled"),
+            checked="`roughconductor` (isotropic and anisotropic); `roughplastic` (× exact/Schlick "
+                    "Fresnel); the random walk on the microsurface",
         )

@@ -91,4 +91,5 @@ class Lambert(BRDF):
                         spread=lambda t: {"reflectance": rgb([0.2 + 0.6 * t, 0.5, 0.8 - 0.6 * t])})],
             pictures=Pictures("reflectance", (0.2, 0.5, 0.8)),
             mitsuba=("diffuse",),
+            checked="Mitsuba's `diffuse`, to float precision",
         )

@@ -305,4 +305,5 @@ class OrenNayar(BRDF):
             variants=[("oren_nayar table vs exact", {**on, "sigma": 0.5, "reflectance": 0.8})],
             pictures=Pictures("sigma", (0.0, 0.5, 1.0, HALF_PI), {"reflectance": 0.8}),
             mitsuba=("diffuse", "principled"),
+            checked="`diffuse` at σ = 0; EON's published listing",
         )

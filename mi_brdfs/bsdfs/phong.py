@@ -258,4 +258,5 @@ class Phong(BRDF):
             pictures=Pictures("exponent", (10.0, 100.0, 1000.0), {"diffuse_reflectance": 0.3,
                                                                   "specular_reflectance": 0.6}),
             mitsuba=("plastic", "roughplastic"),
+            checked="white furnace",
         )

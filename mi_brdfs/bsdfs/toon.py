@@ -405,4 +405,5 @@ class Toon(BRDF):
                                         "specular_ramp": ramp([[0.0] * 3] * 7 + [[1.0] * 3])})],
             pictures=Pictures("specular_threshold", (0.5, 0.8, 0.95)),
             mitsuba=("diffuse",),
+            checked="the lecture's step functions",
         )

@@ -380,4 +380,5 @@ class Ward(BRDF):
             pictures=Pictures("alpha_v", (0.05, 0.15, 0.4), {"alpha_u": 0.05,
                                                              "diffuse_reflectance": 0.3}),
             mitsuba=("roughconductor", "roughplastic"),
+            checked="reciprocity; its two forms agree",
         )

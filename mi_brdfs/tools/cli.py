@@ -34,17 +34,17 @@ Every number and path is checked before work starts. Errors print one line,
 from __future__ import annotations
 
 import argparse
-import math
 import os
-import re
 import sys
 import time
 from importlib import metadata
-from typing import Callable, NoReturn
+from typing import NoReturn
 
 from .. import _interrupt as interrupt
 from ..render import output, tonemap
 from . import outputs
+from .arguments import info_logger, integer, real, set_threads, set_variant, set_verbosity
+from .errors import CLIError, one_line
 from .progress import Progress
 
 DESCRIPTION = ("The course lecture's BRDF models as Mitsuba 3 plugins: render scenes, compare "
@@ -55,42 +55,7 @@ REPORT_MODULES = ("matplotlib", "scipy", "flip_evaluator")
 KNOWN_DEFINES = {"spp": 1, "res": 1}      # the bundled scenes' numeric defaults -> minimum
 
 
-class CLIError(Exception):
-    """An error reported as one line, without a traceback."""
 
-
-# ----------------------------------------------------------------------------
-#  Checked numbers (argparse types: a bad value is one line, exit 1)
-# ----------------------------------------------------------------------------
-
-def integer(low: int, high: int | None = None) -> Callable[[str], int]:
-    """An argparse type: an integer in [low, high]."""
-    valid = f"an integer >= {low}" if high is None else f"an integer from {low} to {high}"
-
-    def parse(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"invalid value {text!r}; valid: {valid}") from None
-        if value < low or (high is not None and value > high):
-            raise argparse.ArgumentTypeError(f"invalid value {text}; valid: {valid}")
-        return value
-    return parse
-
-
-def real(low: float, high: float) -> Callable[[str], float]:
-    """An argparse type: a finite number in [low, high]."""
-    valid = f"a number from {low:g} to {high:g}"
-
-    def parse(text: str) -> float:
-        try:
-            value = float(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"invalid value {text!r}; valid: {valid}") from None
-        if not math.isfinite(value) or not low <= value <= high:
-            raise argparse.ArgumentTypeError(f"invalid value {text}; valid: {valid}")
-        return value
-    return parse
 
 
 def parse_defines(pairs: list[str]) -> dict[str, str]:
@@ -110,46 +75,6 @@ def parse_defines(pairs: list[str]) -> dict[str, str]:
         defines[key] = value
     return defines
 
-
-# ----------------------------------------------------------------------------
-#  Mitsuba's settings: variant, threads, log level
-# ----------------------------------------------------------------------------
-
-def set_variant(name: str | None) -> str:
-    import mitsuba as mi
-
-    import mi_brdfs
-    if name:
-        if name not in mi.variants():
-            raise CLIError(f"-m {name} is not a Mitsuba variant here; valid: "
-                           f"{', '.join(mi.variants())}")
-        try:
-            mi.set_variant(name)
-        except Exception as error:
-            raise CLIError(f"-m {name} cannot be used here: {one_line(error)}") from None
-    return mi_brdfs.register()
-
-
-def set_threads(count: int | None) -> None:
-    if count is not None:
-        import drjit as dr
-        dr.set_thread_count(count)
-
-
-def set_verbosity(level: int) -> None:
-    """0: warnings only; 1: Mitsuba's Info; 2: Debug (and Dr.Jit's Info); 3: Trace."""
-    import drjit as dr
-    import mitsuba as mi
-    mi.set_log_level([mi.LogLevel.Warn, mi.LogLevel.Info, mi.LogLevel.Debug,
-                      mi.LogLevel.Trace][min(level, 3)])
-    if level >= 2:
-        dr.set_log_level(dr.LogLevel.Info if level == 2 else dr.LogLevel.Debug)
-
-
-def info_logger(prog: str, level: int) -> Callable[[str], None]:
-    if level < 1:
-        return lambda msg: None
-    return lambda msg: print(f"{prog}: {msg}", file=sys.stderr)
 
 
 # ----------------------------------------------------------------------------
@@ -511,21 +436,6 @@ def describe(error: BaseException, command: str) -> str:
     return one_line(error)
 
 
-def one_line(error: BaseException) -> str:
-    """The gist of an error on one line. Mitsuba wraps a Python plugin's
-    exception with its traceback: keep only the exception's own last line.
-    Dr.Jit's wrapper of a failed custom operation says only "(see above)":
-    its cause's message instead."""
-    while "(see above)" in str(error) and (error.__cause__ or error.__context__):
-        error = error.__cause__ or error.__context__
-    text = str(error).strip()
-    lines = [line.strip() for line in text.splitlines() if line.strip()]
-    if not lines:
-        return type(error).__name__
-    if "Traceback (most recent call last)" in text:
-        where = re.search(r"At (.+?\(line \d+, col \d+\))", lines[0])
-        return (f"{where.group(1)}: " if where else "") + lines[-1]
-    return " ".join(lines)
 
 
 if __name__ == "__main__":

@@ -145,3 +145,16 @@ def test_broken_cases_fail_their_own_tests_only(tmp_path):
     others = {n for n in passed if not ("lambert" in n or "exponant" in n)}
     assert {n.split("[")[1].split("-")[0] for n in others if "[" in n} >= set(NAMES) - {"lambert"}
     assert any(n.startswith("test_load_eval_pdf_sample[lambert") for n in passed)  # its class
+
+
+def test_what_is_made_from_the_modules_is_up_to_date():
+    """The README's plugin table and the shipped albedo tables are what
+    ``python -m mi_brdfs.tools.regenerate`` makes from the models' modules."""
+    from mi_brdfs.tools import regenerate
+    with open(regenerate.README, encoding="utf-8") as f:
+        readme = f.read()
+    assert regenerate.readme_with_table(readme) == readme, \
+        "README.md's plugin table is stale: python -m mi_brdfs.tools.regenerate"
+    assert regenerate.missing_tables() == []
+    for cls in PLUGINS:
+        assert f"[`{cls.name}`]" in readme

@@ -8,7 +8,7 @@ import sys
 import pytest
 
 from mi_brdfs.render import memory
-from mi_brdfs.tools import cli
+from mi_brdfs.tools import cli, errors
 
 # The peak RSS of one `mi-brdfs render` in a fresh process, as JSON on stdout:
 # the kernel's VmHWM, which starts anew at exec (ru_maxrss would keep the
@@ -80,5 +80,5 @@ def test_an_error_that_says_see_above_shows_its_cause(chain):
                 raise outer from inner
             raise outer
     except RuntimeError as error:
-        assert cli.one_line(error) == ("Tensor(): invalid size specified "
+        assert errors.one_line(error) == ("Tensor(): invalid size specified "
                                        "(40000000000 vs 1345294336)!")

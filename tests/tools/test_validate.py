@@ -13,6 +13,7 @@ import pytest
 from mi_brdfs.bsdfs import BY_NAME
 from mi_brdfs.bsdfs import cases
 from mi_brdfs.tools import cli, groundtruth, validate
+from mi_brdfs.tools.validate import sections
 
 
 @pytest.fixture(scope="module")
@@ -70,11 +71,11 @@ def test_furnace_shows_compensated_beside_uncompensated(report):
     promised = set()
     for model, config in configs:
         rows = {f["mode"]: f for f in r["furnace"] if (f["model"], f["config"]) == (model, config)}
-        expected = {"hdr", "scanline"} | ({validate.COMPENSATED} if model in compensable else set())
+        expected = {"hdr", "scanline"} | ({sections.COMPENSATED} if model in compensable else set())
         assert set(rows) == expected, (model, config)
         assert len({f["plot"] for f in rows.values()}) == 1             # one plot, side by side
         if model in compensable:
-            comp, hdr = rows[validate.COMPENSATED], rows["hdr"]
+            comp, hdr = rows[sections.COMPENSATED], rows["hdr"]
             lost = np.minimum(np.array(hdr["quadrature"]), 1.0)
             assert np.all(np.array(comp["quadrature"]) >= lost - 1e-3), (model, config)
             assert comp["max"] <= 1.005, (model, config)
@@ -114,9 +115,9 @@ def test_exact_fresnel_makes_cook_torrance_roughplastic(report):
     corrected by the exact dielectric term it vanishes to float precision;
     with Schlick's F it is visible."""
     _, r = report
-    assert len(r["fresnel"]) == len(validate.FRESNEL_ALPHAS)
+    assert len(r["fresnel"]) == len(sections.FRESNEL_ALPHAS)
     for row in r["fresnel"]:
-        assert row["corrected"] <= validate.FLOAT_PRECISION and row["schlick"] > 0.03, row
+        assert row["corrected"] <= sections.FLOAT_PRECISION and row["schlick"] > 0.03, row
     status = {c["id"]: c["status"] for c in r["checks"]}
     assert all(status[f"equivalence/{row['id']}"] == "pass" for row in r["fresnel"])
     assert status["equivalence/cook_torrance-roughplastic"] == "documented"
@@ -124,10 +125,10 @@ def test_exact_fresnel_makes_cook_torrance_roughplastic(report):
 
 def test_exact_fresnel_check_sees_a_wrong_index(monkeypatch):
     """The check can fail: the Fresnel term at η = 1.45 where roughplastic has 1.5."""
-    exact = validate.fresnel_dielectric
-    monkeypatch.setattr(validate, "fresnel_dielectric", lambda cos_i, eta: exact(cos_i, 1.45))
+    exact = sections.fresnel_dielectric
+    monkeypatch.setattr(sections, "fresnel_dielectric", lambda cos_i, eta: exact(cos_i, 1.45))
     rows = validate.fresnel_section()
-    assert all(row["corrected"] > 100 * validate.FLOAT_PRECISION for row in rows)
+    assert all(row["corrected"] > 100 * sections.FLOAT_PRECISION for row in rows)
     assert {c["status"] for c in validate.checks({"fresnel": rows})} == {"fail"}
 
 
@@ -242,11 +243,11 @@ def test_a_documented_limitation_does_not_fail_validate(tmp_path, monkeypatch):
 
 @pytest.mark.parametrize("deviation, status", [(0.004, "pass"), (0.02, "fail")])
 def test_compensation_check_fails_off_one(deviation, status):
-    row = {"model": "ward", "config": "c", "mode": validate.COMPENSATED, "promised": True,
+    row = {"model": "ward", "config": "c", "mode": sections.COMPENSATED, "promised": True,
            "deviation": deviation, "max": 1.0, "max_at": 0, "exceeds_1": False,
            "render_vs_quadrature": 0.0}
     energy = validate.checks({"furnace": [row]})[0]
-    assert energy["id"] == f"furnace/ward/c/{validate.COMPENSATED}/energy"
+    assert energy["id"] == f"furnace/ward/c/{sections.COMPENSATED}/energy"
     assert energy["status"] == status and f"{deviation:.4f}" in energy["measured"]
 
 

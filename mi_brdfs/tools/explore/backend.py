@@ -34,13 +34,13 @@ TONEMAP = {"hdr": "aces", "scanline": "clamp"}   # the preview's operator per mo
 
 def port_number():
     """The argparse type of ``--port``: the command line's checked integer."""
-    from ..cli import integer
+    from ..arguments import integer
     return integer(0, 65535)
 
 
 def configure(threads: int | None, verbose: int) -> None:
     """Dr.Jit's thread count and the log level, as the other commands set them."""
-    from ..cli import set_threads, set_verbosity
+    from ..arguments import set_threads, set_verbosity
     set_threads(threads)
     set_verbosity(verbose)
 
@@ -121,7 +121,7 @@ def load(props: dict):
 
 def message(error: BaseException) -> str:
     """Any error on one line, as the ``mi-brdfs`` command reports it."""
-    from ..cli import one_line
+    from ..errors import one_line
     return one_line(error)
 
 

@@ -193,7 +193,11 @@ def make_app(explorer, jit, walker, host: str = "127.0.0.1") -> web.Application:
     async def socket(request):
         if not same_origin(request):
             raise web.HTTPForbidden(reason="websockets from another origin are refused")
-        ws = web.WebSocketResponse(heartbeat=None, max_msg_size=MAX_BODY)
+        # No per-message deflate: aiohttp compresses a large frame in a task
+        # of its own that outlives a cancelled send, and when the page has
+        # gone meanwhile that task's error is logged as never retrieved.  On a
+        # local socket compression saves nothing worth that.
+        ws = web.WebSocketResponse(heartbeat=None, max_msg_size=MAX_BODY, compress=False)
         await ws.prepare(request)
         await Client(ws, ops, next(counter)).serve(request.app["sockets"])
         return ws

@@ -92,7 +92,7 @@ def sweep(targets: list[T.Target], models: list[M.Model], settings: Settings,
             try:
                 record = future.result()
             except Exception as error:             # a worker that died, not a failed fit
-                from ..cli import one_line
+                from ..errors import one_line
                 t, m = tasks[i]
                 record = {"target": t.spec, "model": m.name, "plugin": m.plugin,
                           "error": f"worker failed: {one_line(error)}"}

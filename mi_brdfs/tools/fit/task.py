@@ -185,7 +185,7 @@ def run(target, model, settings: Settings, pairs=None) -> dict:
     try:
         return _run(target, model, settings, pairs)
     except Exception as error:                     # reported in the record, not lost
-        from ..cli import one_line
+        from ..errors import one_line
         return {"target": target.spec, "model": model.name, "plugin": model.plugin,
                 "error": one_line(error), "traceback": traceback.format_exc()}
 

@@ -187,7 +187,7 @@ def spec(distribution: str, geometry: str, f0: float = 1.0,
         f=lambda wi, wo, *a: specular(wi, wo, alpha(a), f0, distribution, geometry),
         sample=lambda wi, u, *a: sample_lobe(wi, u, alpha(a), distribution),
         pdf=lambda wi, wo, *a: pdf_lobe(wi, wo, alpha(a), distribution),
-        samples=256 if anisotropic else compensation.SAMPLES,
+        samples=128 if anisotropic else compensation.SAMPLES,
         valid_up_to=None if distribution != "blinn" else 1.0)
 
 

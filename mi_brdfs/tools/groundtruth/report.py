@@ -148,14 +148,16 @@ def residuals(ref: dict, distribution: str, geometry: str, alpha_max: float = 1.
     return worst
 
 
-def residuals_anisotropic(ref: dict, distribution: str, geometry: str) -> dict:
+def residuals_anisotropic(ref: dict, distribution: str, geometry: str, n: int = 512) -> dict:
     """The compensated anisotropic cook_torrance (k = 0, m_S = 1) against the
     walk of ``ref`` (:func:`reference_anisotropic`) at every angle, azimuth,
     (alpha_u, alpha_v) and F0: the largest relative and absolute differences
-    (relative: where the walk reflects >= 1 %), and where; and the largest
-    relative difference of single scattering alone."""
+    (relative: where the walk reflects >= 1 %), and where, per azimuth
+    (``by_phi``); and the largest relative difference of single scattering
+    alone. ``n``² strata per albedo (:func:`compensated_albedo`)."""
     thetas, walk_values = ref["theta"], np.array(ref[distribution])   # [θ][φ][α_u][α_v][F0]
-    worst = {"relative": 0.0, "absolute": 0.0, "at": None, "single": 0.0}
+    worst = {"relative": 0.0, "absolute": 0.0, "at": None, "single": 0.0,
+             "by_phi": {phi: 0.0 for phi in ref["phi"]}}
     for u, alpha_u in enumerate(ref["alpha"]):
         for v, alpha_v in enumerate(ref["alpha"]):
             for j, f0 in enumerate(ref["f0"]):
@@ -165,16 +167,17 @@ def residuals_anisotropic(ref: dict, distribution: str, geometry: str) -> dict:
                 for k, phi in enumerate(ref["phi"]):
                     w = walk_values[:, k, u, v, j]
                     e = compensated_albedo({**config, "energy_compensation": True}, thetas,
-                                           phi=phi)
+                                           n=n, phi=phi)
                     diff = np.abs(e - w)
                     rel = np.where(w >= 0.01, diff / np.maximum(w, 1e-12), 0.0)
                     m = int(np.argmax(rel))
+                    worst["by_phi"][phi] = max(worst["by_phi"][phi], float(rel[m]))
                     if rel[m] > worst["relative"]:
                         worst.update(relative=float(rel[m]), at=(
                             alpha_u, alpha_v, f0, thetas[m], phi, float(e[m]), float(w[m])))
                     worst["absolute"] = max(worst["absolute"], float(diff.max()))
                     if f0 in (0.0, 0.6, 1.0):    # single scattering alone, for scale
-                        single = compensated_albedo(config, thetas, phi=phi)
+                        single = compensated_albedo(config, thetas, n=n, phi=phi)
                         worst["single"] = max(worst["single"], float(np.max(np.where(
                             w >= 0.01, np.abs(single - w) / np.maximum(w, 1e-12), 0.0))))
     return worst

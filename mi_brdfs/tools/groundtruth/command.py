@@ -97,7 +97,8 @@ def print_residuals(ref: dict) -> None:
                       f"{ref['alpha']}, F0 in [0, 1], 0-85 deg, phi {ref['phi']}: largest "
                       f"relative difference {100 * r['relative']:.1f} % (walk >= 0.01; at "
                       f"({au}, {av}), F0 {f0}, {theta} deg, phi {phi}: {e:.4f} vs {w:.4f}), "
-                      f"largest absolute {r['absolute']:.4f}; by phi: "
+                      f"largest absolute {r['absolute']:.4f}; where the walk reflects >= 3 %: "
+                      f"{100 * r['relative_3']:.1f} %; by phi: "
                       + ", ".join(f"{p} deg {100 * x:.1f} %" for p, x in r["by_phi"].items())
                       + f"; single scattering alone {100 * r['single']:.1f} %")
         return

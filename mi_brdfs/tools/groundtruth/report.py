@@ -153,11 +153,12 @@ def residuals_anisotropic(ref: dict, distribution: str, geometry: str, n: int = 
     walk of ``ref`` (:func:`reference_anisotropic`) at every angle, azimuth,
     (alpha_u, alpha_v) and F0: the largest relative and absolute differences
     (relative: where the walk reflects >= 1 %), and where, per azimuth
-    (``by_phi``); and the largest relative difference of single scattering
+    (``by_phi``), and where it reflects >= 3 % (``relative_3``); and the
+    largest relative difference of single scattering
     alone. ``n``² strata per albedo (:func:`compensated_albedo`)."""
     thetas, walk_values = ref["theta"], np.array(ref[distribution])   # [θ][φ][α_u][α_v][F0]
     worst = {"relative": 0.0, "absolute": 0.0, "at": None, "single": 0.0,
-             "by_phi": {phi: 0.0 for phi in ref["phi"]}}
+             "by_phi": {phi: 0.0 for phi in ref["phi"]}, "relative_3": 0.0}
     for u, alpha_u in enumerate(ref["alpha"]):
         for v, alpha_v in enumerate(ref["alpha"]):
             for j, f0 in enumerate(ref["f0"]):
@@ -172,6 +173,8 @@ def residuals_anisotropic(ref: dict, distribution: str, geometry: str, n: int = 
                     rel = np.where(w >= 0.01, diff / np.maximum(w, 1e-12), 0.0)
                     m = int(np.argmax(rel))
                     worst["by_phi"][phi] = max(worst["by_phi"][phi], float(rel[m]))
+                    worst["relative_3"] = max(worst["relative_3"],
+                                              float(np.max(np.where(w >= 0.03, rel, 0.0))))
                     if rel[m] > worst["relative"]:
                         worst.update(relative=float(rel[m]), at=(
                             alpha_u, alpha_v, f0, thetas[m], phi, float(e[m]), float(w[m])))

@@ -160,8 +160,8 @@ ALBEDO_AXES = (MU_AXIS, ALPHA_AXIS)
 WALK_AXES = (MU_AXIS, ALPHA_AXIS, F0_AXIS)
 # Anisotropic roughness (Beckmann and GGX): the direction is (mu, phi folded into
 # [0, pi/2]), the roughness (alpha_u, alpha_v), both to infinity (9 nodes up to 1);
-# the walk is held beyond alpha 3 on either axis. Node counts measured
-# (docs/guide/energy.md).
+# the walk is held beyond alpha 3 on either axis. Their errors are measured by
+# python -m mi_brdfs.tools.tables --check and against the walk (docs/guide/energy.md).
 ANISOTROPIC_AXES = (Axis("mu", 0.0, 1.0, 17, "sqrt"), Axis("phi", 0.0, 0.5 * math.pi, 9),
                     *(Axis(a, 0.0, float("inf"), 17, "root", smooth=True)
                       for a in ("alpha_u", "alpha_v")))

@@ -131,7 +131,8 @@ class AlbedoSpec:
     """How one model's single-scattering albedo E is tabulated (by quadrature).
 
     ``axes``: the direction axes first — ``mu`` (cos θ, 0..1), and for an
-    anisotropic lobe ``sin2phi`` (sin²φ, 0..1) — then the model parameters, in
+    anisotropic lobe ``sin2phi`` (sin²φ, 0..1) or ``phi`` (the azimuth folded
+    into [0, π/2]: nodes dense near both ends in sin²φ) — then the model parameters, in
     the order ``f``, ``sample`` and ``pdf`` take them after the directions:
     ``f(wi, wo, *p)`` the lobe in eval convention per unit colour,
     ``sample(wi, sample2, *p)`` a direction from its sampler,
@@ -153,23 +154,39 @@ class AlbedoSpec:
 
     @property
     def directions(self) -> int:
-        return 2 if len(self.axes) > 1 and self.axes[1].name == "sin2phi" else 1
+        return 2 if len(self.axes) > 1 and self.axes[1].name in AZIMUTHS else 1
 
 
 @dataclass(frozen=True)
 class WalkSpec:
-    """The albedo W(μ, α, F0) of the random walk on a Smith microsurface of
-    ``distribution`` ("ggx" or "beckmann"), over ``axes`` (mu, alpha, f0);
-    built by :func:`mi_brdfs.tools.groundtruth.table` (offline). The α nodes beyond
-    ``alpha_max`` hold the last walked node's W: there W(F0) turns into a
-    step at F0 = 1 (W -> 0 for F0 < 1 as α -> ∞, every path bouncing ever
-    longer) that no smooth interpolation in F0 follows, and a white surface
-    (W = 1 at F0 = 1) must stay exact."""
+    """The albedo W of the random walk on a Smith microsurface of
+    ``distribution`` ("ggx" or "beckmann"), over ``axes``: the direction
+    axes (mu, and sin2phi for anisotropic roughness), the roughness axes
+    (alpha, or alpha_u along s and alpha_v along t), then f0; built by
+    :func:`mi_brdfs.tools.groundtruth.table` (offline). The roughness nodes
+    beyond ``alpha_max`` hold the last walked node's W (per roughness axis):
+    there W(F0) turns into a step at F0 = 1 (W -> 0 for F0 < 1 as α -> ∞,
+    every path bouncing ever longer) that no smooth interpolation in F0
+    follows, and a white surface (W = 1 at F0 = 1) must stay exact."""
     name: str
     distribution: str
     axes: tuple[Axis, ...]
     alpha_max: float = 10.5
-    directions = 1
+    paths: int = WALK_PATHS         # per node
+
+    @property
+    def directions(self) -> int:
+        return 2 if self.axes[1].name in AZIMUTHS else 1
+
+
+AZIMUTHS = ("sin2phi", "phi")     # the names of a second direction axis
+
+
+def azimuth(axis: Axis, x) -> np.ndarray:
+    """The azimuth φ in [0, π/2] (radians, NumPy) at the coordinate x of the
+    direction axis ``axis`` (sin²φ, or φ itself)."""
+    x = np.asarray(x, dtype=np.float64)
+    return x if axis.name == "phi" else np.arcsin(np.sqrt(np.clip(x, 0.0, 1.0)))
 
 
 # ----------------------------------------------------------------------------
@@ -196,7 +213,8 @@ class Table:
                 x = midpoints(m)
                 w = 2.0 * x / m
             else:                          # the mean over φ in [0, π/2] (g is even in φ)
-                x = np.sin(0.5 * np.pi * midpoints(m)) ** 2
+                x = 0.5 * np.pi * midpoints(m)
+                x = x if axis.name == "phi" else np.sin(x) ** 2
                 w = np.full(m, 1.0 / m)
             weights.append(axis.quadrature(x, w))
         self.average_grid = Grid(self.axes[directions:], self.grid.integrate(weights),
@@ -204,10 +222,12 @@ class Table:
 
     def coordinates(self, v) -> list:
         """The direction axes' coordinates of the local direction v: cos θ, and
-        sin²φ for an anisotropic table."""
+        for an anisotropic table sin²φ or φ folded into [0, π/2]."""
         mu = dr.fmin(dr.fmax(mi.Frame3f.cos_theta(v), 0.0), 1.0)
         coords = [mu]
-        if self.directions == 2:
+        if self.directions == 2 and self.axes[1].name == "phi":
+            coords.append(dr.atan2(dr.abs(v.y), dr.abs(v.x)))      # 0 for v = n
+        elif self.directions == 2:
             rho2 = dr.square(v.x) + dr.square(v.y)
             ok = rho2 > 0
             coords.append(dr.select(ok, dr.square(v.y) / dr.select(ok, rho2, 1.0), 0.0))
@@ -327,14 +347,15 @@ def complement(spec: AlbedoSpec) -> Table:
 
 
 def walk_residual(white: AlbedoSpec, black: AlbedoSpec, walk: WalkSpec) -> Table:
-    """g(μ, α, F0) = W - (F0 E(F = 1) + (1 - F0) E(F0 = 0)), clamped at 0: what a
+    """g(ω, α, F0) = W - (F0 E(F = 1) + (1 - F0) E(F0 = 0)), clamped at 0: what a
     microfacet model's single scattering misses of the random walk (the
-    walk's (μ, α) axes are those of ``white`` and ``black``)."""
+    walk's axes are those of ``white`` and ``black``, then F0)."""
     def make() -> Table:
         e1, e0, w = shipped(white), shipped(black), shipped(walk)
-        f0 = walk.axes[2].nodes()
+        f0 = walk.axes[-1].nodes()
         single = f0 * e1[..., None] + (1.0 - f0) * e0[..., None]
-        return Table(walk.axes, np.clip(w - single, 0.0, 1.0), 1, (white, black, walk))
+        return Table(walk.axes, np.clip(w - single, 0.0, 1.0), walk.directions,
+                     (white, black, walk))
     return _cached(f"{walk.name} - {white.name}", make)
 
 

@@ -37,7 +37,10 @@ G; Blinn's D and the V-cavity against the walk of the nearest Smith
 microsurface: the documentation's energy guide). A white surface (F0 = 1,
 m_S = 1; and m_D = 1 if k > 0) reflects 1 at every angle, and m_S scales it
 linearly, as ``roughconductor``'s ``specular_reflectance``; with k > 0 the
-albedo is k·m_D + (1 - k)·(the compensated specular).
+albedo is k·m_D + (1 - k)·(the compensated specular). With ``alpha_u`` and
+``alpha_v`` (Beckmann, GGX) the tables have the viewer's azimuth and both
+roughnesses as axes, (cos θ, φ, α_u, α_v, F0), from the walk on the
+anisotropic microsurface (held beyond α = 3 on either axis).
 
 .. code-block:: xml
 
@@ -159,35 +162,54 @@ ALPHA_AXIS = Axis("alpha", 0.0, float("inf"), 57, "root", smooth=True)
 F0_AXIS = Axis("f0", 0.0, 1.0, 25, smooth=True)
 ALBEDO_AXES = (MU_AXIS, ALPHA_AXIS)
 WALK_AXES = (MU_AXIS, ALPHA_AXIS, F0_AXIS)
+# Anisotropic roughness (Beckmann and GGX): the direction is (mu, phi folded into
+# [0, pi/2]), the roughness (alpha_u, alpha_v), both to infinity (9 nodes up to 1);
+# the walk is held beyond alpha 3 on either axis. Their errors are measured by
+# python -m mi_brdfs.tools.tables --check and against the walk (docs/guide/energy.md).
+ANISOTROPIC_AXES = (Axis("mu", 0.0, 1.0, 17, "sqrt"), Axis("phi", 0.0, 0.5 * math.pi, 9),
+                    *(Axis(a, 0.0, float("inf"), 17, "root", smooth=True)
+                      for a in ("alpha_u", "alpha_v")))
+ANISOTROPIC_WALK_AXES = ANISOTROPIC_AXES + (Axis("f0", 0.0, 1.0, 9, smooth=True),)
 # The Smith microsurface whose random walk is the truth for each D (Blinn's
 # exponent 2/alpha² - 2 is Walter's mapping onto Beckmann at the same alpha).
 WALK_DISTRIBUTION = {"ggx": "ggx", "beckmann": "beckmann", "blinn": "beckmann"}
 
 
-def spec(distribution: str, geometry: str, f0: float = 1.0) -> compensation.AlbedoSpec:
+def spec(distribution: str, geometry: str, f0: float = 1.0,
+         anisotropic: bool = False) -> compensation.AlbedoSpec:
     """The single-scattering albedo table of D x G with Schlick's F0 (1 or 0);
-    Blinn's beyond alpha = 1 extrapolated (its alpha <= 1)."""
-    hi = 1.0 if distribution == "blinn" else float("inf")
-    alpha = lambda a: dr.fmin(dr.fmax(a, mf.ALPHA_MIN), hi)
-    name = f"cook_torrance/{distribution}/{geometry}" + ("" if f0 == 1.0 else f"/f0={f0:g}")
+    Blinn's beyond alpha = 1 extrapolated (its alpha <= 1). ``anisotropic``:
+    over (mu, phi, alpha_u, alpha_v)."""
+    hi = 1.0 if distribution == "blinn" else mf.ALPHA_MAX_ANISOTROPIC if anisotropic \
+        else float("inf")
+    clamp = lambda a: dr.fmin(dr.fmax(a, mf.ALPHA_MIN), hi)
+    alpha = lambda a: tuple(map(clamp, a)) if anisotropic else clamp(a[0])
+    name = f"cook_torrance/{distribution}/{geometry}" + ("" if f0 == 1.0 else f"/f0={f0:g}") \
+        + ("/anisotropic" if anisotropic else "")
     return compensation.AlbedoSpec(
-        name, ALBEDO_AXES,
-        f=lambda wi, wo, a: specular(wi, wo, alpha(a), f0, distribution, geometry),
-        sample=lambda wi, u, a: sample_lobe(wi, u, alpha(a), distribution),
-        pdf=lambda wi, wo, a: pdf_lobe(wi, wo, alpha(a), distribution),
+        name, ANISOTROPIC_AXES if anisotropic else ALBEDO_AXES,
+        f=lambda wi, wo, *a: specular(wi, wo, alpha(a), f0, distribution, geometry),
+        sample=lambda wi, u, *a: sample_lobe(wi, u, alpha(a), distribution),
+        pdf=lambda wi, wo, *a: pdf_lobe(wi, wo, alpha(a), distribution),
+        samples=128 if anisotropic else compensation.SAMPLES,
         valid_up_to=None if distribution != "blinn" else 1.0)
 
 
-def walk_spec(distribution: str) -> compensation.WalkSpec:
+def walk_spec(distribution: str, anisotropic: bool = False) -> compensation.WalkSpec:
     """The random walk's albedo table of the Smith microsurface nearest to D."""
     smith = WALK_DISTRIBUTION[distribution]
+    if anisotropic:
+        return compensation.WalkSpec(f"walk/{smith}/anisotropic", smith, ANISOTROPIC_WALK_AXES,
+                                     alpha_max=3.0, paths=20_000)
     return compensation.WalkSpec(f"walk/{smith}", smith, WALK_AXES)
 
 
-def walk_residual(distribution: str, geometry: str) -> compensation.Table:
-    """g(mu, alpha, F0) = W - E_ss (see :func:`.compensation.walk_residual`)."""
-    return compensation.walk_residual(spec(distribution, geometry),
-                                      spec(distribution, geometry, 0.0), walk_spec(distribution))
+def walk_residual(distribution: str, geometry: str,
+                  anisotropic: bool = False) -> compensation.Table:
+    """g(mu, [phi,] alpha, F0) = W - E_ss (see :func:`.compensation.walk_residual`)."""
+    return compensation.walk_residual(spec(distribution, geometry, 1.0, anisotropic),
+                                      spec(distribution, geometry, 0.0, anisotropic),
+                                      walk_spec(distribution, anisotropic))
 
 
 class CookTorrance(BRDF):
@@ -241,9 +263,6 @@ class CookTorrance(BRDF):
                 name = "alpha_u" if "alpha_u" in props else "alpha_v"
                 raise reader.error(name, props[name], 'distribution "beckmann" or "ggx" '
                                    "(Blinn's D is isotropic here: give alpha)")
-            if self.options.energy_compensation:
-                raise reader.error("energy_compensation", True, "false with alpha_u/alpha_v "
-                                   "(no anisotropic table yet)")
         given = ("alpha_u", "alpha_v") if self.anisotropic else ("alpha",)
         for p in self.PARAMS:
             if p.name.startswith("alpha") and p.name not in given:
@@ -257,7 +276,9 @@ class CookTorrance(BRDF):
     @classmethod
     def tables(cls) -> list:
         return ([spec(d, g, f0) for d in mf.DISTRIBUTIONS for g in mf.GEOMETRIES
-                 for f0 in (1.0, 0.0)] + [walk_spec(d) for d in ("ggx", "beckmann")])
+                 for f0 in (1.0, 0.0)] + [walk_spec(d) for d in ("ggx", "beckmann")]
+                + [spec(d, g, f0, True) for d in ("ggx", "beckmann") for g in mf.GEOMETRIES
+                   for f0 in (1.0, 0.0)] + [walk_spec(d, True) for d in ("ggx", "beckmann")])
 
     # --- lobes ---------------------------------------------------------------
     def has_diffuse(self) -> bool:
@@ -315,8 +336,14 @@ class CookTorrance(BRDF):
 
     # --- energy compensation: what single scattering misses of the random walk ---
     def compensation(self) -> compensation.Compensation:
+        o = self.options
+        if self.anisotropic:            # over (mu, phi, alpha_u, alpha_v, F0)
+            return compensation.Tabulated(
+                walk_residual(o.distribution, o.geometry, True),
+                parameters=lambda inp: (*inp.alpha, self.m_f0),
+                sources=("alpha_u", "alpha_v", "f0"), colour=lambda inp: inp.colour_s)
         return compensation.Tabulated(
-            walk_residual(self.options.distribution, self.options.geometry),
+            walk_residual(o.distribution, o.geometry),
             parameters=lambda inp: (inp.alpha, self.m_f0), sources=("alpha", "f0"),
             colour=lambda inp: inp.colour_s)
 
@@ -440,6 +467,30 @@ class CookTorrance(BRDF):
                      for d in ("beckmann", "ggx") for g in mf.GEOMETRIES
                      for au, av in ((0.0, 1.0), (1e-4, 1e-4), (1.0, 0.0)) for k in (0.0, 0.5)
                      for mode in ("hdr", "scanline")]
+        # Compensated anisotropic roughness: white furnaces along, across and off the
+        # tangent (30°: between the table's azimuth nodes), to alpha 1 and beyond.
+        white = {**c, "k": 0.0, "f0": 1.0, "specular_reflectance": 1.0,
+                 "energy_compensation": True}
+        # (the V-cavity beyond alpha 1: within 2 %, measured 1.05-1.5 % off at (0.5, 3) and
+        # (30, 2): its 4-D E table's 128² quadrature, see docs/guide/energy.md)
+        furnace += [replace(preserves(f"compensated, {d}, {g}, α {au} × {av}",
+                                      {**white, "distribution": d, "geometry": g, "alpha_u": au,
+                                       "alpha_v": av}, phis=(0.0, 30.0, 45.0, 90.0)),
+                            tol=0.02 if g == "cook_torrance" and max(au, av) > 1 else 0.01)
+                    for d in ("beckmann", "ggx") for g in mf.GEOMETRIES
+                    for au, av in ((0.05, 0.3), (1.0, 0.1), (0.4, 0.7), (0.5, 3.0), (30.0, 2.0))]
+        chi2 += [Chi2({**white, "distribution": "ggx", "geometry": "smith", "alpha_u": 0.2,
+                       "alpha_v": 0.7}, (0, 45, 85), phi=30.0),
+                 Chi2({**white, "distribution": "beckmann", "alpha_u": 0.8, "alpha_v": 0.1,
+                       "k": 0.3}, (60,), phi=30.0)]
+        consistency += [{**white, "distribution": "ggx", "geometry": "smith", "alpha_u": 0.3,
+                         "alpha_v": 0.8, "k": 0.2, "f0": 0.5,
+                         "specular_reflectance": rgb([0.95, 0.64, 0.54])},
+                        {**white, "distribution": "beckmann", "alpha_u": 0.6, "alpha_v": 0.05}]
+        extremes += [{**c, "distribution": d, "geometry": g, "alpha_u": au, "alpha_v": av,
+                      "k": 0.0, "energy_compensation": True}
+                     for d in ("beckmann", "ggx") for g in mf.GEOMETRIES
+                     for au, av in ((0.0, 1.0), (1e4, 1e-4), (1e3, 1e3))]
         return Cases(
             chi2=chi2, consistency=consistency, furnace=furnace, extremes=extremes,
             interior=[{**c, "distribution": d, "geometry": "smith", "alpha": 0.4, "k": 0.4,
@@ -449,8 +500,9 @@ class CookTorrance(BRDF):
                 "diffuse_reflectance": 0.5, "specular_reflectance": 0.7,
                 "energy_compensation": True}]
             + [{**c, "distribution": d, "geometry": "smith", "alpha_u": 0.2, "alpha_v": 0.5,
-                "k": 0.4, "f0": 0.3, "diffuse_reflectance": 0.5, "specular_reflectance": 0.7}
-               for d in ("beckmann", "ggx")],
+                "k": 0.4, "f0": 0.3, "diffuse_reflectance": 0.5, "specular_reflectance": 0.7,
+                **on} for d, on in (("beckmann", {}), ("ggx", {}),
+                                    ("ggx", {"energy_compensation": True}))],
             negative=({**c, "distribution": "ggx", "k": 0.0, "alpha": 0.1},
                       {**c, "distribution": "ggx", "k": 0.0, "alpha": 0.105}, 45),
             lobe_width=0.35,
@@ -459,7 +511,10 @@ class CookTorrance(BRDF):
             + [{**c, "distribution": d, "geometry": "smith", "alpha": 0.6, "k": 0.0,
                 "energy_compensation": True, "specular_reflectance": rgb([0.95, 0.64, 0.54])}
                for d in mf.DISTRIBUTIONS]
-            + [{**a, "k": 0.2} for a in anisotropic],
+            + [{**a, "k": 0.2} for a in anisotropic]
+            + [{**white, "distribution": d, "alpha_u": 0.15, "alpha_v": 0.6,
+                "specular_reflectance": rgb([0.95, 0.64, 0.54]), "f0": 0.4}
+               for d in ("beckmann", "ggx")],
             lobe={**c, "distribution": "ggx", "alpha": 0.3, "k": 0.3, "f0": 0.5,
                   "diffuse_reflectance": 0.8},
             costs=[(f"cook_torrance {d} {g}", {**c, "distribution": d, "geometry": g, "alpha": 0.3})
@@ -496,7 +551,10 @@ class CookTorrance(BRDF):
                                                  "alpha": 0.5, "k": 0.3}),
                     ("cook_torrance beckmann cook_torrance", {**c, "alpha": 0.5, "k": 0.3}),
                     ("cook_torrance blinn smith", {**c, "distribution": "blinn", "geometry": "smith",
-                                                   "alpha": 0.5, "k": 0.3})],
+                                                   "alpha": 0.5, "k": 0.3}),
+                    ("cook_torrance ggx smith anisotropic",
+                     {**c, "distribution": "ggx", "geometry": "smith", "alpha_u": 0.1,
+                      "alpha_v": 0.4, "k": 0.3})],
             sampling=[(f"cook_torrance ggx alpha {a}",
                        {**c, "distribution": "ggx", "alpha": a, "k": 0.0, "f0": 0.9},
                        [("visible normals", {}), ("full distribution", {"sample_visible": False}),

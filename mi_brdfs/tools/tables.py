@@ -39,7 +39,6 @@ from ..bsdfs import compensation
 from ..bsdfs.grid import hemisphere_direction
 
 MU_85 = 0.0871557      # cos 85°
-CHECK_ROWS = (4, 12, 20, 28)   # the μ rows of a walk table that --check walks again
 
 
 # ----------------------------------------------------------------------------
@@ -62,7 +61,8 @@ def build(spec: compensation.AlbedoSpec, samples: int | None = None, batch: int 
     infinite = np.isinf(grid).any(axis=1)
     grid = grid[~infinite]
     mu = np.maximum(grid[:, 0], MU_MIN)
-    wi_np = hemisphere_direction(mu, grid[:, 1] if d == 2 else None)
+    wi_np = hemisphere_direction(mu, np.sin(compensation.azimuth(spec.axes[1], grid[:, 1])) ** 2
+                                 if d == 2 else None)
     params_np = grid[:, d:]
     # Jittered strata (a fixed seed): the midpoints alone alias with samplers
     # that split the square (GGX's visible normals: 0.998 instead of 0.976).
@@ -149,33 +149,45 @@ def interpolation_error(spec, table, samples: int, bounded: bool = False) -> tup
 
 
 def check_walk(spec, paths: int, log) -> str:
-    """(MC noise, interpolation error along alpha and F0) of a walk table, on CHECK_ROWS."""
+    """(MC noise, interpolation error along the roughness axes and F0) of a
+    walk table, on four μ rows (at φ = 0 and 90° for an anisotropic one)."""
 
     from . import groundtruth
     shipped = compensation.shipped(spec)
-    rows = list(CHECK_ROWS)
+    rows = [k * (spec.axes[0].n - 1) // 8 for k in (1, 3, 5, 7)]   # 33 nodes: rows 4, 12, 20, 28
     again = groundtruth.table(spec, paths=paths, seed=WALK_SEED + 1, rows=rows)
-    walked = spec.axes[1].nodes() <= spec.alpha_max
-    noise = np.abs(again[rows][:, walked] - shipped[rows][:, walked]).max()
-    # cell centres in alpha (between walked nodes) and F0, against the interpolation
+    d = spec.directions
+    rough = spec.axes[d:-1]
+    walked = np.ix_(*[a.nodes() <= spec.alpha_max for a in rough])
+    noise = max(np.abs(again[i][..., *walked, :] - shipped[i][..., *walked, :]).max()
+                for i in rows)
+    # cell centres in the roughness axes (between walked nodes) and in F0, against the
+    # interpolation (the same seed: the walk's noise, correlated between nodes, mostly cancels)
     fine = refined(spec)
-    a_mid = fine.axes[1].nodes()[1::2]
-    a_mid = a_mid[a_mid < spec.axes[1].nodes()[walked][-1]]
-    f_mid = fine.axes[2].nodes()[1::2]
-    grid = compensation.Table(spec.axes, shipped).grid
+    mids = []
+    for a, f in zip(rough, fine.axes[d:-1]):
+        x = f.nodes()[1::2]
+        mids.append(x[x < a.nodes()[a.nodes() <= spec.alpha_max][-1]])
+    f_mid = fine.axes[-1].nodes()[1::2]
+    grid = compensation.Table(spec.axes, shipped, d).grid
+    mesh = [m.ravel() for m in np.meshgrid(*mids, indexing="ij")]
     worst = 0.0
     for i in rows:
         mu = spec.axes[0].nodes()[i]
-        walked = groundtruth.albedo(spec.distribution, max(mu, MU_MIN), a_mid, f_mid,
-                                    paths, WALK_SEED)
-        A, F = np.meshgrid(a_mid, f_mid, indexing="ij")
-        interp = np.asarray(grid(from_numpy(mi.Float, np.full(A.size, mu)),
-                                 from_numpy(mi.Float, A), from_numpy(mi.Float, F))).reshape(A.shape)
-        worst = max(worst, float(np.abs(interp - walked).max()))
+        for s2 in ((spec.axes[1].lo, spec.axes[1].hi) if d == 2 else (None,)):   # φ 0, 90°
+            alpha = mesh[0] if d == 1 else groundtruth.Alpha(*mesh)
+            phi = 0.0 if s2 is None else compensation.azimuth(spec.axes[1], s2)
+            walked_w = groundtruth.albedo(spec.distribution, max(mu, MU_MIN), alpha, f_mid, paths,
+                                          WALK_SEED, phi=phi)
+            point = [np.repeat(m, len(f_mid)) for m in mesh] + [np.tile(f_mid, len(mesh[0]))]
+            where = [np.full(point[0].size, mu)] + ([] if s2 is None
+                                                    else [np.full(point[0].size, s2)])
+            interp = np.asarray(grid(*[from_numpy(mi.Float, x) for x in where + point]))
+            worst = max(worst, float(np.abs(interp - walked_w.ravel()).max()))
         log(f"  {spec.name}: checked mu row {i}")
     return (f"{spec.name}: axes {'x'.join(str(a.n) for a in spec.axes)}; Monte-Carlo noise "
-            f"{noise:.1e} ({paths} paths vs the shipped {compensation.WALK_PATHS}, rows {rows}); "
-            f"interpolation error along alpha and F0 {worst:.1e} (where walked)")
+            f"{noise:.1e} ({paths} paths vs the shipped {spec.paths}, rows {rows}); "
+            f"interpolation error along the roughness and F0 {worst:.1e} (where walked)")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -188,9 +200,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--samples", type=int,
                         help="quadrature samples per axis (default: each table's, "
                              f"{compensation.SAMPLES} for most)")
-    parser.add_argument("--paths", type=int, default=compensation.WALK_PATHS,
-                        help=f"random-walk paths per node (default {compensation.WALK_PATHS}; "
-                             "--check: a quarter of it)")
+    parser.add_argument("--paths", type=int,
+                        help="random-walk paths per node (default: each table's, "
+                             f"{compensation.WALK_PATHS} for most; --check: a quarter of it)")
     args = parser.parse_args(argv)
     if not dr.is_jit_v(mi.Float):
         mi.set_variant("llvm_ad_rgb")
@@ -209,7 +221,7 @@ def main(argv: list[str] | None = None) -> int:
         start = time.perf_counter()
         walk = isinstance(spec, compensation.WalkSpec)
         if args.check and walk:
-            print(check_walk(spec, max(1000, args.paths // 4), log)
+            print(check_walk(spec, max(1000, (args.paths or spec.paths) // 4), log)
                   + f" [{time.perf_counter() - start:.0f} s]")
             continue
         if args.check:
@@ -234,7 +246,7 @@ def main(argv: list[str] | None = None) -> int:
         if walk:
             from . import groundtruth
             out[spec.name] = groundtruth.table(spec, paths=args.paths, log=log)
-            what = f"{args.paths} paths"
+            what = f"{args.paths or spec.paths} paths"
         else:
             out[spec.name] = build(spec, args.samples)
             what = f"{args.samples or spec.samples}^2 samples"

@@ -18,6 +18,7 @@ from mi_brdfs.tools.groundtruth import Alpha
 from support import direction
 
 REFERENCE = json.load(open(os.path.join(os.path.dirname(__file__), "walk_reference.json")))
+ANISOTROPIC_REFERENCE = os.path.join(os.path.dirname(__file__), "walk_reference_anisotropic.json")
 
 
 # ----------------------------------------------------------------------------
@@ -250,6 +251,26 @@ def test_the_reference_albedos_are_the_walk():
         assert 1e-4 < a["largest"] < 1e-2, (distribution, a)    # noise there is, and little
 
 
+def test_the_anisotropic_reference_albedos_are_the_walk():
+    """The committed anisotropic reference (walk_reference_anisotropic.json:
+    [distribution][θ][φ][α_u][α_v][F0]) walked again at some of its points with
+    another seed: within 5 standard errors of the difference (the stored
+    points' error taken from the new walk's at the stored path count), and a
+    white surface stored as exactly 1."""
+    ref = json.load(open(ANISOTROPIC_REFERENCE))
+    picks = [(0, 0, 0, 3), (5, 1, 4, 1), (8, 0, 2, 5), (8, 1, 5, 0), (6, 1, 3, 3)]  # θ, φ, u, v
+    theta, phi, u, v = (np.array(c) for c in zip(*picks))
+    alphas = np.array(ref["alpha"])
+    for distribution in gt.DISTRIBUTIONS:
+        live, error = gt.albedo(distribution, np.cos(np.radians(np.array(ref["theta"])[theta])),
+                                Alpha(alphas[u], alphas[v]), ref["f0"], paths=20_000, seed=9,
+                                phi=np.radians(np.array(ref["phi"])[phi]), error=True)
+        stored = np.array(ref[distribution])[theta, phi, u, v]
+        spread = np.hypot(error, error * math.sqrt(20_000 / ref["paths"])) + 1e-6
+        assert np.all(np.abs(live - stored) <= 5 * spread), (live - stored) / spread
+        np.testing.assert_array_equal(np.array(ref[distribution])[..., -1], 1.0)
+
+
 def test_unknown_distribution_is_refused():
     with pytest.raises(ValueError, match="random walk: distribution 'blinn'; valid: ggx, beckmann"):
         gt.albedo("blinn", [1.0], 0.5)
@@ -260,7 +281,8 @@ def test_unknown_distribution_is_refused():
     (["--paths", "1", "--residuals"], "--paths 1: at least 2 paths per point"),
     (["--agreement"], "--agreement compares with the values of --reference FILE"),
     (["--reference", "/nonexistent/ref.json", "--residuals"], "--reference /nonexistent/ref.json"),
-    (["-o", "/nonexistent/folder/ref.json"], "folder /nonexistent/folder does not exist")])
+    (["-o", "/nonexistent/folder/ref.json"], "folder /nonexistent/folder does not exist"),
+    (["--reference", ANISOTROPIC_REFERENCE, "--agreement"], "holds anisotropic reference albedos")])
 def test_the_command_refuses_bad_input_in_one_line(args, shown, capsys):
     from mi_brdfs.tools.groundtruth.command import main
     with pytest.raises(SystemExit) as exit_:

@@ -10,11 +10,14 @@ Beckmann, isotropic or anisotropic, with Schlick's Fresnel at every bounce.
   viewer azimuth), the BRDF by next-event estimation (:func:`brdf`), the
   energy tables' W (:func:`table`, for ``python -m mi_brdfs.tools.tables``);
 - :mod:`.report`: what is measured against it — the reference albedos
-  (``tests/bsdfs/walk_reference.json``), the compensated plugins' residuals,
+  (``tests/bsdfs/walk_reference.json``; for anisotropic roughness
+  ``tests/bsdfs/walk_reference_anisotropic.json``), the compensated plugins' residuals,
   BRDF slices, the validation report's section (:func:`report_section`);
 - :mod:`.command`: the command line::
 
     python -m mi_brdfs.tools.groundtruth -o tests/bsdfs/walk_reference.json   # reference albedos
+    python -m mi_brdfs.tools.groundtruth --roughness anisotropic \
+        -o tests/bsdfs/walk_reference_anisotropic.json                     # (theta, phi, alpha_u, alpha_v, F0)
     python -m mi_brdfs.tools.groundtruth --reference FILE --residuals  # compensation vs the walk
     python -m mi_brdfs.tools.groundtruth --reference FILE --agreement  # FILE vs a new walk
     python -m mi_brdfs.tools.groundtruth --slices          # BRDF slices vs the walk
@@ -32,11 +35,12 @@ Needs SciPy (the ``reports`` extra).
 from .microsurface import (DISTRIBUTIONS, Alpha, d, d_visible, fresnel, lam, projected_area,
                            sample_visible, single_scattering)
 from .report import (RESIDUAL_BOUND, compensated_albedo, reference, reference_agreement,
-                     report_html, report_section, residuals, slice_difference)
+                     reference_anisotropic, report_html, report_section, residuals,
+                     residuals_anisotropic, slice_difference)
 from .walk import MAX_ORDER, albedo, brdf, directions, table, walk
 
 __all__ = ["DISTRIBUTIONS", "MAX_ORDER", "RESIDUAL_BOUND", "Alpha", "albedo", "brdf", "d",
            "d_visible", "directions", "fresnel", "lam", "projected_area", "sample_visible",
            "single_scattering", "table", "walk", "compensated_albedo", "reference",
-           "reference_agreement", "report_html", "report_section", "residuals",
-           "slice_difference"]
+           "reference_agreement", "reference_anisotropic", "report_html", "report_section",
+           "residuals", "residuals_anisotropic", "slice_difference"]

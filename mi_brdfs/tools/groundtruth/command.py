@@ -10,8 +10,8 @@ import sys
 import numpy as np
 
 from .microsurface import DISTRIBUTIONS, Alpha
-from .report import (compensated_albedo, reference, reference_agreement, residuals,
-                     slice_difference)
+from .report import (compensated_albedo, reference, reference_agreement,
+                     reference_anisotropic, residuals, residuals_anisotropic, slice_difference)
 from .walk import albedo
 
 PROG = "python -m mi_brdfs.tools.groundtruth"
@@ -21,7 +21,11 @@ ANISOTROPIC = ((0.05, 0.3), (0.3, 0.05), (0.1, 1.0))      # (α_x, α_y) printed
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog=PROG, description=main.__doc__)
     parser.add_argument("-o", "--output", help="write the reference albedos (JSON) here")
-    parser.add_argument("--reference", help="read them from here (instead of walking)")
+    parser.add_argument("--roughness", choices=("isotropic", "anisotropic"), default="isotropic",
+                        help="which reference albedos -o writes: over (theta, alpha, F0), or "
+                             "over (theta, phi, alpha_u, alpha_v, F0) (default isotropic)")
+    parser.add_argument("--reference", help="read them from here (instead of walking); "
+                                            "either kind")
     parser.add_argument("--paths", type=int, default=100_000, help="paths per point")
     parser.add_argument("--residuals", action="store_true",
                         help="print the compensated models' residuals against the walk")
@@ -84,6 +88,20 @@ def print_anisotropic(paths: int) -> None:
 
 
 def print_residuals(ref: dict) -> None:
+    if "phi" in ref:                                 # an anisotropic reference
+        for distribution in DISTRIBUTIONS:
+            for geometry in ("smith", "cook_torrance"):
+                r = residuals_anisotropic(ref, distribution, geometry)
+                au, av, f0, theta, phi, e, w = r["at"]
+                print(f"{distribution}/{geometry} anisotropic: alpha_u, alpha_v in "
+                      f"{ref['alpha']}, F0 in [0, 1], 0-85 deg, phi {ref['phi']}: largest "
+                      f"relative difference {100 * r['relative']:.1f} % (walk >= 0.01; at "
+                      f"({au}, {av}), F0 {f0}, {theta} deg, phi {phi}: {e:.4f} vs {w:.4f}), "
+                      f"largest absolute {r['absolute']:.4f}; where the walk reflects >= 3 %: "
+                      f"{100 * r['relative_3']:.1f} %; by phi: "
+                      + ", ".join(f"{p} deg {100 * x:.1f} %" for p, x in r["by_phi"].items())
+                      + f"; single scattering alone {100 * r['single']:.1f} %")
+        return
     for distribution in ("ggx", "beckmann", "blinn"):
         for geometry in ("smith", "cook_torrance"):
             r = residuals(ref, distribution, geometry)
@@ -119,6 +137,9 @@ def main(argv: list[str] | None = None) -> int:
         except (OSError, ValueError) as error:
             parser.error(f"--reference {args.reference}: cannot read it "
                          f"({getattr(error, 'strerror', None) or error})")
+        if args.agreement and "phi" in ref:
+            parser.error(f"--agreement: {args.reference} holds anisotropic reference albedos; "
+                         "--agreement compares isotropic ones")
     if args.output:
         try:
             check_output_file(args.output)
@@ -141,7 +162,8 @@ def main(argv: list[str] | None = None) -> int:
     if not (args.output or args.residuals):
         return 0
     if ref is None:
-        ref = reference(args.paths, log)
+        make = reference_anisotropic if args.roughness == "anisotropic" else reference
+        ref = make(args.paths, log)
     if args.output:
         tmp = args.output + ".tmp"
         with open(tmp, "w") as f:

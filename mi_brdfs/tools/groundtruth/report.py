@@ -9,13 +9,17 @@ import os
 import numpy as np
 
 from ..._jit import from_numpy
-from .microsurface import DISTRIBUTIONS
+from .microsurface import DISTRIBUTIONS, Alpha
 from .walk import albedo, brdf
 
 REFERENCE_ALPHAS = (0.05, 0.1, 0.2, 0.3, 0.45, 0.6, 0.8, 1.0, 1.5, 3.0)
 REFERENCE_F0S = (0.0, 0.1, 0.3, 0.45, 0.6, 0.7, 0.8, 0.9, 0.95, 1.0)
 REFERENCE_THETAS = (0, 15, 30, 45, 60, 70, 75, 80, 85)
 REFERENCE_SEED = 4242            # not the tables' seed: independent paths
+# Anisotropic roughness: every ordered pair (alpha_u, alpha_v) of these, seen along
+# (phi 0) and across (phi 90°) the tangent; between the tables' nodes but for 1
+ANISOTROPIC_ALPHAS = (0.05, 0.15, 0.3, 0.5, 0.8, 1.0)
+ANISOTROPIC_PHIS = (0, 90)
 ROUNDING = 1e-6 / math.sqrt(12)  # the standard deviation of the stored values' rounding
 
 
@@ -33,6 +37,27 @@ def reference(paths: int = 100_000, log=None) -> dict:
             if log:
                 log(f"{distribution}: theta {theta}")
         out[distribution] = rows                       # [theta][alpha][f0]
+    return out
+
+
+def reference_anisotropic(paths: int = 100_000, log=None) -> dict:
+    """The walk's albedo for anisotropic roughness at REFERENCE_THETAS x
+    ANISOTROPIC_PHIS x (alpha_u, alpha_v) in ANISOTROPIC_ALPHAS² x REFERENCE_F0S,
+    for each distribution: ``ref[distribution][theta][phi][alpha_u][alpha_v][f0]``."""
+    out = {"paths": paths, "seed": REFERENCE_SEED, "theta": list(REFERENCE_THETAS),
+           "phi": list(ANISOTROPIC_PHIS), "alpha": list(ANISOTROPIC_ALPHAS),
+           "f0": list(REFERENCE_F0S)}
+    phi, au, av = np.meshgrid(np.radians(ANISOTROPIC_PHIS), ANISOTROPIC_ALPHAS,
+                              ANISOTROPIC_ALPHAS, indexing="ij")
+    for distribution in DISTRIBUTIONS:
+        rows = []
+        for theta in REFERENCE_THETAS:
+            w = albedo(distribution, math.cos(math.radians(theta)), Alpha(au.ravel(), av.ravel()),
+                       REFERENCE_F0S, paths, REFERENCE_SEED, phi=phi.ravel())
+            rows.append(w.reshape(phi.shape + (len(REFERENCE_F0S),)).round(6).tolist())
+            if log:
+                log(f"{distribution}: theta {theta}")
+        out[distribution] = rows
     return out
 
 
@@ -69,11 +94,13 @@ def reference_agreement(ref: dict, paths: int, seed: int = REFERENCE_SEED + 1,
     return out
 
 
-def compensated_albedo(config: dict, thetas, n: int = 1024, seed: int = 7) -> np.ndarray:
+def compensated_albedo(config: dict, thetas, n: int = 1024, seed: int = 7,
+                       phi: float = 0.0) -> np.ndarray:
     """The albedo of a plugin configuration (white m_S: the first channel) at
-    each angle (degrees): 2π times the mean of eval over n² jittered strata
-    of the square mapped to the hemisphere by Mitsuba's equal-area (concentric)
-    map, which resolves a narrow lobe anywhere alike."""
+    each angle (degrees; the viewer at azimuth ``phi`` degrees from the
+    tangent): 2π times the mean of eval over n² jittered strata of the square
+    mapped to the hemisphere by Mitsuba's equal-area (concentric) map, which
+    resolves a narrow lobe anywhere alike."""
     import drjit as dr
     import mitsuba as mi
 
@@ -84,9 +111,10 @@ def compensated_albedo(config: dict, thetas, n: int = 1024, seed: int = 7) -> np
     bsdf = mi.load_dict(config)
     out = []
     for theta in thetas:
-        t = math.radians(theta)
+        t, p = math.radians(theta), math.radians(phi)
         si = dr.zeros(mi.SurfaceInteraction3f)
-        si.wi = mi.Vector3f(*(dr.opaque(mi.Float, c) for c in (math.sin(t), 0.0, math.cos(t))))
+        si.wi = mi.Vector3f(*(dr.opaque(mi.Float, c) for c in (
+            math.sin(t) * math.cos(p), math.sin(t) * math.sin(p), math.cos(t))))
         value = bsdf.eval(mi.BSDFContext(), si, wo)
         out.append(float(dr.sum(mi.Float64(value[0]))[0]) * 2.0 * math.pi / (n * n))
     return np.array(out)
@@ -117,6 +145,44 @@ def residuals(ref: dict, distribution: str, geometry: str, alpha_max: float = 1.
                 worst.update(relative=float(rel[k]), at=(alpha, f0, thetas[k], float(e[k]),
                                                          float(w[k])))
             worst["absolute"] = max(worst["absolute"], float(diff.max()))
+    return worst
+
+
+def residuals_anisotropic(ref: dict, distribution: str, geometry: str, n: int = 512) -> dict:
+    """The compensated anisotropic cook_torrance (k = 0, m_S = 1) against the
+    walk of ``ref`` (:func:`reference_anisotropic`) at every angle, azimuth,
+    (alpha_u, alpha_v) and F0: the largest relative and absolute differences
+    (relative: where the walk reflects >= 1 %), and where, per azimuth
+    (``by_phi``), and where it reflects >= 3 % (``relative_3``); and the
+    largest relative difference of single scattering
+    alone. ``n``² strata per albedo (:func:`compensated_albedo`)."""
+    thetas, walk_values = ref["theta"], np.array(ref[distribution])   # [θ][φ][α_u][α_v][F0]
+    worst = {"relative": 0.0, "absolute": 0.0, "at": None, "single": 0.0,
+             "by_phi": {phi: 0.0 for phi in ref["phi"]}, "relative_3": 0.0}
+    for u, alpha_u in enumerate(ref["alpha"]):
+        for v, alpha_v in enumerate(ref["alpha"]):
+            for j, f0 in enumerate(ref["f0"]):
+                config = {"type": "cook_torrance", "distribution": distribution,
+                          "geometry": geometry, "alpha_u": alpha_u, "alpha_v": alpha_v,
+                          "k": 0.0, "f0": f0, "specular_reflectance": 1.0}
+                for k, phi in enumerate(ref["phi"]):
+                    w = walk_values[:, k, u, v, j]
+                    e = compensated_albedo({**config, "energy_compensation": True}, thetas,
+                                           n=n, phi=phi)
+                    diff = np.abs(e - w)
+                    rel = np.where(w >= 0.01, diff / np.maximum(w, 1e-12), 0.0)
+                    m = int(np.argmax(rel))
+                    worst["by_phi"][phi] = max(worst["by_phi"][phi], float(rel[m]))
+                    worst["relative_3"] = max(worst["relative_3"],
+                                              float(np.max(np.where(w >= 0.03, rel, 0.0))))
+                    if rel[m] > worst["relative"]:
+                        worst.update(relative=float(rel[m]), at=(
+                            alpha_u, alpha_v, f0, thetas[m], phi, float(e[m]), float(w[m])))
+                    worst["absolute"] = max(worst["absolute"], float(diff.max()))
+                    if f0 in (0.0, 0.6, 1.0):    # single scattering alone, for scale
+                        single = compensated_albedo(config, thetas, n=n, phi=phi)
+                        worst["single"] = max(worst["single"], float(np.max(np.where(
+                            w >= 0.01, np.abs(single - w) / np.maximum(w, 1e-12), 0.0))))
     return worst
 
 

@@ -46,6 +46,7 @@ bounces are dropped (none at F0 = 1 up to α = 3 in the tests).
 """
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import NamedTuple
 
 import numpy as np
@@ -182,23 +183,50 @@ def brdf(distribution: str, wi, wo, alpha, f0=1.0, paths: int = 100_000, seed: i
 
 def table(spec, paths: int | None = None, seed: int | None = None, rows=None,
           log=None) -> np.ndarray:
-    """W at the nodes of a :class:`mi_brdfs.bsdfs.compensation.WalkSpec` (μ, α, F0):
-    one call per μ node, every α node up to ``spec.alpha_max`` on common
-    random numbers (the nodes beyond hold the last one's W). μ = 0 is walked
-    at ``MU_MIN``, α = 0 at ``ALPHA_MIN`` (as the plugins clamp them).
+    """W at the nodes of a :class:`mi_brdfs.bsdfs.compensation.WalkSpec`
+    (μ, [φ or sin²φ,] α or (α_u, α_v), F0): one call per μ node, every node up to
+    ``spec.alpha_max`` on common random numbers (the roughness nodes beyond
+    hold the last walked one's W, per axis). μ = 0 is walked at ``MU_MIN``,
+    α = 0 at ``ALPHA_MIN`` (as the plugins clamp them). An anisotropic table
+    is walked where α_u < α_v, or α_u = α_v and φ <= 45°, and filled by the
+    quarter turn W(μ, φ, α_u, α_v) = W(μ, 90° - φ, α_v, α_u).
     ``rows``: only these μ nodes (the others are NaN)."""
-    from ...bsdfs.compensation import WALK_PATHS
-    from ..tables import MU_MIN, WALK_SEED
+    from ...bsdfs.compensation import azimuth
     from ...bsdfs.microfacet import ALPHA_MIN
-    mu_axis, alpha_axis, f0_axis = spec.axes
+    from ..tables import MU_MIN, WALK_SEED
+    mu_axis, f0_axis, inner = spec.axes[0], spec.axes[-1], spec.axes[1:-1]
     mus = np.maximum(mu_axis.nodes(), MU_MIN)
-    alphas = np.maximum(alpha_axis.nodes(), ALPHA_MIN)
-    walked = alphas <= spec.alpha_max
-    out = np.full((len(mus), len(alphas), f0_axis.n), np.nan)
+    walked = [np.flatnonzero(a.nodes() <= spec.alpha_max) if a.name.startswith("alpha")
+              else np.arange(a.n) for a in inner]        # the walked nodes of each axis
+    index = np.meshgrid(*walked, indexing="ij")        # (φ,) α or (α_u, α_v)
+    keep = np.ones(index[0].shape, dtype=bool)
+    if spec.directions == 2:                            # the quarter turn's canonical half
+        s, u, v = index
+        x = inner[0].nodes()
+        if not (np.allclose(x, x[0] + x[-1] - x[::-1])
+                and replace(inner[2], name=inner[1].name) == inner[1]):
+            raise ValueError(f"{spec.name}: the quarter turn needs a symmetric azimuth axis "
+                             "and equal roughness axes")
+        keep = (u < v) | ((u == v) & (2 * s <= inner[0].n - 1))
+    nodes = [np.maximum(a.nodes(), ALPHA_MIN) if a.name.startswith("alpha") else a.nodes()
+             for a in inner]
+    point = [x[i[keep]] for x, i in zip(nodes, index)]
+    out = np.full(tuple(a.n for a in spec.axes), np.nan)
     for i in (range(len(mus)) if rows is None else rows):
-        out[i, walked] = albedo(spec.distribution, mus[i], alphas[walked], f0_axis.nodes(),
-                                paths or WALK_PATHS, WALK_SEED if seed is None else seed)
-        out[i, ~walked] = out[i, np.flatnonzero(walked)[-1]]
+        if spec.directions == 2:
+            phi = azimuth(inner[0], point[0])
+            w = albedo(spec.distribution, mus[i], Alpha(point[1], point[2]), f0_axis.nodes(),
+                       paths or spec.paths, WALK_SEED if seed is None else seed, phi=phi)
+        else:
+            w = albedo(spec.distribution, mus[i], point[0], f0_axis.nodes(),
+                       paths or spec.paths, WALK_SEED if seed is None else seed)
+        block = np.full(index[0].shape + (f0_axis.n,), np.nan)
+        block[keep] = w
+        if spec.directions == 2:                        # the other half by the quarter turn
+            block = np.where(np.isnan(block), block[::-1].swapaxes(1, 2), block)
+        # the nodes beyond alpha_max hold the last walked one's W
+        held = np.ix_(*[np.minimum(np.arange(a.n), len(k) - 1) for a, k in zip(inner, walked)])
+        out[i] = block[held]
         if log:
             log(f"{spec.name}: mu node {i + 1}/{len(mus)}")
     return out

@@ -14,7 +14,9 @@ material creates light.
 :func:`features`: the physical features of a target that none of the course
 models has, measured on the target itself — its mirror colour turning white
 towards grazing incidence (a conductor's spectral Fresnel: Schlick's scalar
-F0 times a colour keeps the colour), and anisotropy (the highlight changes
+F0 times a colour keeps the colour; the specular colour is the mirror
+direction's less the body's, so that a coloured diffuse body under a white
+highlight is not mistaken for it), and anisotropy (the highlight changes
 when both directions turn about the normal); an anisotropic target is then
 fitted once more by ward with ``alpha_u`` and ``alpha_v``, the project's one
 anisotropic configuration (:func:`extended_models`).
@@ -33,6 +35,8 @@ GRAZING_DEG = 85.0
 WHITENING_DEG = (0.0, 80.0)      # the mirror colour compared at these incidences
 ANISOTROPY_MIN = 0.02            # relative change under a 90° turn that counts as anisotropic
 WHITENING_MIN = 0.05             # chroma lost between 0° and 80° that counts as whitening
+CHROMA_MIN = 0.1                 # a specular colour this close to grey cannot whiten
+BODY_DEG = 30.0                  # the body colour is read from a light 30° off the normal, viewer's side
 
 
 def schlick(f0: float, cos_theta: float) -> float:
@@ -95,30 +99,40 @@ def albedo(bsdf, angles=ALBEDO_ANGLES, samples: int = ALBEDO_SAMPLES, seed: int 
     return out
 
 
-def _mirror_eval(bsdf, theta_deg: float, phi_deg: float = 0.0) -> np.ndarray:
-    """eval for a viewer at θ and the light at its mirror direction (RGB)."""
+def _at(bsdf, theta_i: float, theta_o: float) -> np.ndarray:
+    """eval (RGB) for a viewer at θ_i and a light at θ_o in the plane of
+    incidence (θ_o > 0: the mirror side, θ_o < 0: the viewer's side)."""
     from ..analysis import eval_at_viewer
-    t, p = math.radians(theta_deg), math.radians(phi_deg)
-    wo = np.array([[math.sin(t) * math.cos(p + math.pi), math.sin(t) * math.sin(p + math.pi),
-                    math.cos(t)]])
-    return eval_at_viewer(bsdf, theta_deg, wo, phi_i_deg=phi_deg)[0]
+    t = math.radians(theta_o)
+    wo = np.array([[math.sin(t), 0.0, math.cos(t)]])
+    return eval_at_viewer(bsdf, theta_i, wo)[0]
+
+
+def specular_colour(bsdf, theta_deg: float) -> np.ndarray:
+    """The specular lobe's own colour at incidence θ: eval at the mirror
+    direction less the body's (the eval at a light on the viewer's side,
+    BODY_DEG off the normal, scaled by the cosines as a Lambert body is).
+    A course model's specular colour is one colour times a scalar F(θ)."""
+    body = _at(bsdf, theta_deg, -BODY_DEG) / math.cos(math.radians(BODY_DEG))
+    return _at(bsdf, theta_deg, theta_deg) - body * math.cos(math.radians(theta_deg))
 
 
 def _chroma(rgb: np.ndarray) -> float:
-    """How far a colour is from grey: the largest channel's relative spread."""
+    """How far a colour is from grey: (largest - smallest channel) / mean."""
     m = float(np.mean(rgb))
     return float((np.max(rgb) - np.min(rgb)) / m) if m > 0 else 0.0
 
 
 def features(target_bsdf, pairs) -> dict:
-    """Measured on the target: ``whitening`` (its mirror colour's chroma at
-    0° and at 80°, and the share lost) and ``anisotropy`` (the relative change
-    of eval at ``pairs`` when both directions turn 90° about the normal)."""
+    """Measured on the target: ``whitening`` (its specular colour's chroma at
+    0° and at 80° incidence, :func:`specular_colour`, and the share lost) and
+    ``anisotropy`` (the relative change of eval at ``pairs`` when both
+    directions turn 90° about the normal)."""
     import drjit as dr
     import mitsuba as mi
 
     from .optimise import values_of
-    c0, c80 = (_chroma(_mirror_eval(target_bsdf, a)) for a in WHITENING_DEG)
+    c0, c80 = (_chroma(specular_colour(target_bsdf, a)) for a in WHITENING_DEG)
     lost = (c0 - c80) / c0 if c0 > 0 else 0.0
     turn = lambda w: np.stack([-w[:, 1], w[:, 0], w[:, 2]], axis=1)
     n = len(pairs.wi)
@@ -133,7 +147,7 @@ def features(target_bsdf, pairs) -> dict:
     den = float(np.sum(w * evals[0] ** 2))
     aniso = math.sqrt(num / den) if den > 0 else 0.0
     return {"whitening": {"chroma_0": c0, "chroma_80": c80, "lost": lost,
-                          "present": bool(c0 > 0.1 and lost > WHITENING_MIN)},
+                          "present": bool(c0 > CHROMA_MIN and lost > WHITENING_MIN)},
             "anisotropy": {"change": aniso, "present": bool(aniso > ANISOTROPY_MIN)}}
 
 
@@ -153,7 +167,7 @@ def describe(found: dict) -> list[str]:
     out = []
     w = found["whitening"]
     if w["present"]:
-        out.append(f"its mirror colour turns white towards grazing incidence (chroma "
+        out.append(f"its specular colour turns white towards grazing incidence (chroma "
                    f"{w['chroma_0']:.2f} at 0°, {w['chroma_80']:.2f} at 80°): a conductor's "
                    "spectral Fresnel; no course model has it (Schlick's scalar f0 times a "
                    "colour keeps that colour at every angle)")

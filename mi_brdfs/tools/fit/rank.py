@@ -97,6 +97,8 @@ def verdict(records: list[dict], plugin: str) -> str:
     if not order:
         return "every fit failed"
     best = order[0]
+    if best.get("cost_ratio") is None:
+        return f"{best['model']}: FLIP {quality(best):.3f} (render cost not measured)"
     line = (f"{best['model']}: FLIP {quality(best):.3f}, {_cost_text(best)} the cost of {plugin}")
     cheap = [r for r in order if cheaper(r, best)]
     if cheap:

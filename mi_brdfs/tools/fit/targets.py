@@ -252,10 +252,10 @@ def check_values(spec: str, bsdf) -> None:
     si.uv = mi.Point2f(0.5, 0.5)
     values = values_of(bsdf, si, from_numpy(mi.Vector3f, p.wo.T))
     bad = int(np.sum(~np.isfinite(values).all(axis=1)))
-    reflected = np.array(albedo(bsdf, (0.0, 45.0, 80.0), samples=4096))
     if bad:
         raise TargetError(f"target {spec}: its eval is not finite (NaN or infinite) at {bad} of "
                           f"{len(values)} direction pairs")
+    reflected = np.array(albedo(bsdf, (0.0, 45.0, 80.0), samples=4096))
     if not (reflected > 0).any() and not (values > 0).any():
         raise TargetError(f"target {spec}: it is black (it reflects no light at any direction "
                           "pair tried, nor in 4096 sampled directions at 0°, 45° and 80°)")

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import os
 import sys
+import time
 
 from . import metric, models, targets
 from .task import FULL, QUICK, Settings
@@ -78,14 +79,16 @@ def fit(specs: list[str], out_dir: str, model_names: list[str] | None = None,
                                 if e.name not in names]]
     measuring = settings.render and settings.cost
     total = len(tasks) * (2 if measuring else 1)
+    start = time.perf_counter()
     try:
         records = sweep.run_fits(tasks, settings, jobs=jobs, scheduler=scheduler, show=show,
-                                 client=client, worker_timeout=timeout, total=total)
+                                 client=client, worker_timeout=timeout, total=total, start=start)
     finally:
         if client is not None:
             client.close()
     if measuring:
-        cost.measure_all(parsed, records, settings, show, offset=len(tasks), total=total)
+        cost.measure_all(parsed, records, settings, show, offset=len(tasks), total=total,
+                         start=start)
     with outputs.report_dir(out_dir, "fit", files) as tmp:
         report.write(tmp, records, settings, command, found)
         if also:

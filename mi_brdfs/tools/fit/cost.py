@@ -177,11 +177,11 @@ def measure_costs(target, records: list[dict], settings, show=None) -> None:
 
 
 def measure_all(targets: list, records: list[dict], settings, show=None, offset: int = 0,
-                total: int | None = None) -> None:
+                total: int | None = None, start: float | None = None) -> None:
     """:func:`measure_costs` for every target, one measurement at a time;
     ``show(done, total, elapsed, record)`` after each (``offset``: the steps
-    done before)."""
-    start = time.perf_counter()
+    done before, ``start``: the run's ``time.perf_counter()`` at its start)."""
+    start = time.perf_counter() if start is None else start
     done = [offset]
 
     def step(record: dict) -> None:

@@ -151,6 +151,32 @@ def features(target_bsdf, pairs) -> dict:
             "anisotropy": {"change": aniso, "present": bool(aniso > ANISOTROPY_MIN)}}
 
 
+def conductor_f0(target) -> list[float] | None:
+    """F0 per channel of a conductor target given as a shorthand, or None:
+    ((η - 1)² + k²)/((η + 1)² + k²) of a ``roughconductor``'s RGB indices
+    of refraction, a metallic ``principled``'s base colour."""
+    import mitsuba as mi
+    props = dict(target.props)
+    if props.get("type") == "principled" and props.get("metallic", 0.0) >= 1.0:
+        return list(props.get("base_color", (0.5, 0.5, 0.5)))
+    if props.get("type") != "roughconductor":
+        return None
+    bsdf = target.load()
+    p = mi.traverse(bsdf)
+    eta, k = (np.array(p[key], dtype=float).ravel() for key in ("eta.value", "k.value"))
+    del bsdf, p
+    return [float(v) for v in ((eta - 1) ** 2 + k ** 2) / ((eta + 1) ** 2 + k ** 2)]
+
+
+def normal_colour(record: dict) -> list[float] | None:
+    """A fit's colour at normal incidence: its specular colour at 0° (the
+    highlight seen head-on); a model without a specular lobe, its diffuse colour."""
+    e = record.get("effective") or {}
+    if e.get("specular_0") is None:
+        return e.get("diffuse")
+    return e["specular_0"]
+
+
 def target_features(target, settings) -> dict:
     """:func:`features` of a :class:`.targets.Target` on the settings' metric pairs."""
     from .metric import pairs

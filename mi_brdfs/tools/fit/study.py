@@ -13,8 +13,8 @@ objective, ``objectives.md`` gives
   material's own family (the microfacet model with its distribution);
 - for the conductors, the largest channel difference between the
   first-ranked fit's colour at normal incidence (its specular colour at 0°,
-  :func:`.effective.parameters`) and the target's F0 (from its complex index
-  of refraction, or a metallic ``principled``'s base colour).
+  :func:`.effective.parameters`) and the target's F0
+  (:func:`.effective.conductor_f0`).
 
 No render cost is measured (it does not depend on the objective).
 """
@@ -29,7 +29,7 @@ import sys
 
 import numpy as np
 
-from . import metric, rank, targets as T
+from . import effective, metric, rank, targets as T
 from .task import FULL, QUICK
 
 MODELS = ("lambert", "oren_nayar", "phong", "blinn", "ward", "cook_torrance/beckmann/cook_torrance",
@@ -45,23 +45,6 @@ def family(spec: str) -> str:
     if spec.startswith("diffuse"):
         return "lambert"
     return "cook_torrance/beckmann/smith"
-
-
-def target_f0(target) -> list[float] | None:
-    """F0 per channel of a conductor target, or None: ((η-1)² + k²)/((η+1)² + k²)
-    of a roughconductor's RGB indices; a metallic principled's base colour."""
-    import mitsuba as mi
-    props = dict(target.props)
-    if props.get("type") == "principled" and props.get("metallic", 0.0) >= 1.0:
-        return list(props["base_color"])
-    if props.get("type") != "roughconductor":
-        return None
-    bsdf = target.load()
-    p = mi.traverse(bsdf)
-    eta = np.array(p["eta.value"], dtype=float).ravel()
-    k = np.array(p["k.value"], dtype=float).ravel()
-    del bsdf, p
-    return list(((eta - 1) ** 2 + k ** 2) / ((eta + 1) ** 2 + k ** 2))
 
 
 def grazing_share(target, settings, objective: str) -> float:
@@ -99,11 +82,9 @@ def run_study(quick: bool = False, jobs: int = 2, show=None, targets=None) -> di
             mine = [r for r in records if r["target_name"] == t.name]
             order = rank.ranked(mine)
             own = next((r for r in order if r["model"] == family(t.spec)), None)
-            f0 = target_f0(t)
+            f0 = effective.conductor_f0(t)
             first = order[0] if order else None
-            colour = None
-            if first is not None:
-                colour = first["effective"]["specular_0"] or first["effective"]["diffuse"]
+            colour = None if first is None else effective.normal_colour(first)
             rows.append({"target": t.spec, "first": first and first["model"],
                          "first_flip": first and first["image_flip"],
                          "best_flip": min(rank.quality(r) for r in order) if order else None,

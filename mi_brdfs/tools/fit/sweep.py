@@ -191,13 +191,15 @@ def local_sweep(executor: cf.Executor, tasks: list, settings: Settings, collect)
 
 def run_fits(tasks: list[tuple[T.Target, M.Model]], settings: Settings, jobs: int = 1,
              scheduler: str | None = None, show=None, client=None,
-             worker_timeout: float = WORKER_TIMEOUT, total: int | None = None) -> list[dict]:
+             worker_timeout: float = WORKER_TIMEOUT, total: int | None = None,
+             start: float | None = None) -> list[dict]:
     """Every (target, model) task, on local processes or on the Dask scheduler
     at ``scheduler`` (``client``: one already connected); records in task
     order. ``show(done, total, elapsed, record)`` after each task (``total``:
-    the steps of the whole run, if more than the fits)."""
+    the steps of the whole run, if more than the fits; ``start``: its
+    ``time.perf_counter()`` at the start of the run)."""
     records: list[dict | None] = [None] * len(tasks)
-    start = time.perf_counter()
+    start = time.perf_counter() if start is None else start
 
     def collect(i: int, record: dict) -> None:
         record["target_name"] = tasks[i][0].name

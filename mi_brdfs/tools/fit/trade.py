@@ -1,6 +1,8 @@
 """The speed/accuracy trade across the course models: ``mi-brdfs fit`` over a
 fixed list of materials (:data:`TARGETS`) and the table "which model for
-which material" (:func:`table`). A bench group runs it in one line::
+which material" (:func:`table`). The bench's ``trade`` group runs it in one
+line, and so does ``python -m mi_brdfs.tools.fit.trade -o DIR [--quick] [-j N]``
+(the committed ``docs/benchmarks/trade``)::
 
     records = trade.fit_materials(os.path.join(out_dir, "trade"), quick=quick)
 
@@ -14,9 +16,11 @@ and as a brass-like metal (GGX), and ``diffuse``.
 """
 from __future__ import annotations
 
+import argparse
 import math
 import os
 import statistics
+import sys
 
 PLASTIC = "diffuse_reflectance=[0.6,0.2,0.1]"
 TARGETS = (          # (label, target)
@@ -87,4 +91,59 @@ def table(records: list[dict], labels: dict[str, str] | None = None) -> str:
             text = (f"{flip:.2f} · " if flip is not None else "") + f"{r['brdf_error']:.3f}"
             row.append(f"**{text}**" if r.get("rank") == 1 else text)
         lines.append("| " + " | ".join(row) + " |")
+    return "\n".join(lines) + "\n\n" + answers(records, labels)
+
+
+def answers(records: list[dict], labels: dict[str, str] | None = None) -> str:
+    """Per material: the verdict (:func:`.rank.verdict`), how far the
+    first-ranked fit's FLIP is from the best FLIP of any fit, and for a
+    conductor the largest channel difference between the first-ranked fit's
+    colour at normal incidence and the material's F0."""
+    from . import effective, rank, targets as T
+    labels = labels or {}
+    lines = ["| material | verdict | first-ranked FLIP - best FLIP | conductor: F0 error |",
+             "|---|---|---|---|"]
+    for spec in dict.fromkeys(r["target"] for r in records):
+        mine = [r for r in records if r["target"] == spec]
+        order = rank.ranked(mine)
+        if not order:
+            lines.append(f"| {labels.get(spec, spec)} | every fit failed | – | – |")
+            continue
+        gap = rank.quality(order[0]) - min(rank.quality(r) for r in order)
+        f0 = effective.conductor_f0(T.parse([spec])[0])
+        colour = effective.normal_colour(order[0])
+        error = ("–" if f0 is None or colour is None else
+                 f"{max(abs(a - b) for a, b in zip(colour, f0)):.3f}")
+        lines.append(f"| {labels.get(spec, spec)} | {rank.verdict(mine, rank.target_plugin(spec))} "
+                     f"| {gap:.3f} | {error} |")
     return "\n".join(lines) + "\n"
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m mi_brdfs.tools.fit.trade -o DIR [--quick] [-j N]``."""
+    from ..cli import one_line
+    from .sweep import progress_printer
+    p = argparse.ArgumentParser(prog="python -m mi_brdfs.tools.fit.trade",
+                                description="The trade sweep: every course model fitted to "
+                                            "the fixed materials; a fit report with trade.md.")
+    p.add_argument("-o", "--output", required=True,
+                   help="report folder: new, empty, or a previous report")
+    p.add_argument("--quick", action="store_true", help="fewer pairs, pixels and timing rounds")
+    p.add_argument("-j", "--jobs", type=int, default=None, help="fits at once (default: up to 2)")
+    args = p.parse_args(argv)
+    show = progress_printer(p.prog)
+    try:
+        records = fit_materials(args.output, quick=args.quick, jobs=args.jobs, show=show)
+    except Exception as error:
+        show.close()
+        print(f"{p.prog}: error: {one_line(error)}", file=sys.stderr)
+        return 1
+    show.close()
+    failed = [r for r in records if "error" in r]
+    print(f"{os.path.join(args.output, 'trade.md')}: {len(records) - len(failed)} fits, "
+          f"{len(failed)} failed")
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

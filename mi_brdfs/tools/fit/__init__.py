@@ -90,7 +90,7 @@ def fit(specs: list[str], out_dir: str, model_names: list[str] | None = None,
         cost.measure_all(parsed, records, settings, show, offset=len(tasks), total=total,
                          start=start)
     with outputs.report_dir(out_dir, "fit", files) as tmp:
-        report.write(tmp, records, settings, command, found)
+        records = report.write(tmp, records, settings, command, found)
         if also:
             also(tmp, records)
     for r in records:

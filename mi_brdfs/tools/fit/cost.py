@@ -15,6 +15,11 @@ geometric mean of the ratios (Student's t on their logarithms) is within
 the interval. Only one measurement runs at a time, after every fit: fits
 running beside it would be measured with it.
 
+**Again** (``python -m mi_brdfs.tools.fit.cost REPORT_DIR [--targets N]``):
+the costs of a fit report's fits measured once more and printed beside the
+report's, with whether the two intervals overlap — the spread of the method
+on this machine. It writes nothing.
+
 **Counted** (``ops_ratio``): the Dr.Jit variables one traced ``eval`` and
 one traced ``sample`` create (the bench's count, from Dr.Jit's trace log:
 :func:`..bench.anatomy.variables_created`), relative to the target's: the
@@ -22,10 +27,13 @@ same on every run.
 """
 from __future__ import annotations
 
+import argparse
+import json
 import math
 import multiprocessing
 import os
 import statistics
+import sys
 import time
 
 OPS_LANES = 1024           # lanes of the traced calls counted (the count does not depend on it)
@@ -193,3 +201,61 @@ def measure_all(targets: list, records: list[dict], settings, show=None, offset:
         mine = [r for r in records if r.get("target_name") == t.name]
         measure_costs(t, mine, settings, step)
         done[0] += sum(1 for r in mine if "error" in r)
+
+
+def remeasure(report_dir: str, max_targets: int | None = None, settings=None, show=None
+              ) -> list[dict]:
+    """The fits of a report measured again: per fit, the report's interval and
+    the new one."""
+    from . import targets as T
+    from .task import FULL
+    settings = settings or FULL
+    with open(os.path.join(report_dir, "fits.json")) as f:
+        saved = [r for r in json.load(f) if "error" not in r and r.get("cost_ratio") is not None]
+    specs = list(dict.fromkeys(r["target"] for r in saved))[:max_targets]
+    rows = []
+    for spec in specs:
+        target = T.parse([spec])[0]
+        again = [{"model": r["model"], "parameters": r["parameters"]} for r in saved
+                 if r["target"] == spec]
+        measure_costs(target, again, settings, show)
+        for old, new in zip([r for r in saved if r["target"] == spec], again):
+            rows.append({"target": spec, "model": old["model"],
+                         "before": (old["cost_ratio"], old["cost_low"], old["cost_high"]),
+                         "again": (new.get("cost_ratio"), new.get("cost_low"), new.get("cost_high")),
+                         "rounds": new.get("cost_rounds"), "load": new.get("cost_load"),
+                         "overlap": (new.get("cost_low") is not None
+                                     and new["cost_low"] <= old["cost_high"]
+                                     and old["cost_low"] <= new["cost_high"])})
+    return rows
+
+
+def main(argv: list[str] | None = None) -> int:
+    from ..cli import one_line
+    p = argparse.ArgumentParser(prog="python -m mi_brdfs.tools.fit.cost",
+                                description="Measure a fit report's render costs again and "
+                                            "compare the intervals (writes nothing).")
+    p.add_argument("report", help="a mi-brdfs fit report folder (its fits.json)")
+    p.add_argument("--targets", type=int, default=None, help="only the first N targets")
+    args = p.parse_args(argv)
+    try:
+        rows = remeasure(args.report, args.targets)
+    except Exception as error:
+        print(f"{p.prog}: error: {one_line(error)}", file=sys.stderr)
+        return 1
+    print("| target | model | report | again | rounds | load | overlap |")
+    print("|---|---|---|---|---|---|---|")
+    for r in rows:
+        b, a = r["before"], r["again"]
+        again = "failed" if a[0] is None else f"{a[0]:.2f} ({a[1]:.2f}–{a[2]:.2f})"
+        print(f"| {r['target']} | {r['model']} | {b[0]:.2f} ({b[1]:.2f}–{b[2]:.2f}) | {again} | "
+              f"{r['rounds']} | {r['load']:.1f} | {'yes' if r['overlap'] else 'NO'} |")
+    both = [r for r in rows if r["again"][0] is not None]
+    widths = [r["again"][2] / r["again"][1] for r in both]
+    print(f"\n{sum(r['overlap'] for r in both)} of {len(both)} intervals overlap; "
+          f"high/low median {statistics.median(widths):.3f}, largest {max(widths):.3f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,5 +1,5 @@
-"""The BRDF-space metrics the fit minimises, and the direction pairs they are
-estimated on.
+"""The BRDF-space metrics the fit reports (``brdf_error``), the objective it
+minimises, and the direction pairs both are estimated on.
 
 ``cosine`` (the default): the L² distance of the two BRDFs under the
 projected solid angle of both directions, relative to the target's own norm::
@@ -23,6 +23,19 @@ sample weighted by its solid angle, over the pairs with both angles at most
     E²_ngan(f) = Σ w (f_t cos θ_o - f cos θ_o)² / Σ w,   θ_i, θ_o <= 80°
 
 reported relative to a black BSDF's, as ``cosine``.
+
+**The objective** (:data:`OBJECTIVES`, :func:`compress`): the same pairs,
+each ``eval`` value compressed — by default its cube root, c(x) =
+(x + 10⁻⁴)^(1/3) - 10^(-4/3) — and weighted by ``Pairs.shown``: for
+``cosine`` the pair's weight times cos θ_i (the pixels that see the viewer;
+``eval`` already holds cos θ_o), for ``ngan`` its own weight::
+
+    E_c²(f) = Σ shown ‖c(eval_t) - c(eval)‖²,   objective = E_c(f) / E_c(0)
+
+A sum of squares of ``eval`` itself is ruled by the peaks (they grow towards
+the horizon: 45 % of the cosine metric's weight lies within 10° of it, median
+over the trade materials, 5 % of the cube root's; ``python -m
+mi_brdfs.tools.fit.study``), and a fit to it gives up a dim colour first.
 
 **The direction pairs** (fixed by a seed: every fit of a run sees the same
 set): viewers ω_i stratified over the hemisphere, uniformly in (cos θ, φ)

@@ -67,8 +67,10 @@ def clean(record: dict) -> dict:
 
 
 def write(out: str, records: list[dict], settings, command: str, features: dict | None = None
-          ) -> None:
-    """Every file of the report into the folder ``out`` (a temporary one)."""
+          ) -> list[dict]:
+    """Every file of the report into the folder ``out`` (a temporary one);
+    the records in the report's order (targets as given, fits in rank order,
+    failed fits last), each with its ``rank``."""
     by_target: dict[str, list[dict]] = {}
     for r in records:
         by_target.setdefault(r["target_name"], []).append(r)
@@ -106,6 +108,7 @@ def write(out: str, records: list[dict], settings, command: str, features: dict 
                         for k in FIELDS + CSV_EXTRA])
     with open(os.path.join(out, "index.html"), "w") as f:
         f.write(_html(sections, settings, command))
+    return ordered
 
 
 # ----------------------------------------------------------------------------

@@ -66,9 +66,12 @@ def table(records: list[dict], labels: dict[str, str] | None = None) -> str:
     of its interval's ends) and its median operation count (× the target's),
     and on each target its image FLIP and its BRDF error (``0.06 · 0.110``);
     the first-ranked model per target in bold."""
+    from .models import names
     labels = labels or {}
     specs = list(dict.fromkeys(r["target"] for r in records))
-    models = list(dict.fromkeys(r["model"] for r in records))
+    canonical = {name: i for i, name in enumerate(names())}          # the models' own order
+    models = sorted(dict.fromkeys(r["model"] for r in records),
+                    key=lambda m: canonical.get(m, len(canonical)))
     cell = {(r["target"], r["model"]): r for r in records}
     head = ["model", "cost × (90 %)", "ops ×"] + [labels.get(s, s) for s in specs]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]

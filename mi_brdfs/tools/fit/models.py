@@ -23,10 +23,11 @@ a parameter that touched it stayed there). Near lo, x - lo ≈ (hi - lo)·e^u,
 so a roughness or an exponent far below its upper end moves on a log scale.
 u is kept within ±``U_MAX`` (σ = 6·10⁻⁶ from either end).
 
-**Starts** (:func:`starts`): the plugin's defaults; every shape and weight
-parameter at the low end, then at the high end (u = ±``U_START``), the
-colours at their defaults; then a Latin hypercube across the ranges, on a log
-scale for roughnesses and exponents, evenly in angle for cosines.
+Where the search starts (:func:`.optimise.candidates`): the plugin's
+defaults; every shape and weight parameter at the low end, then at the high
+end (u = ±``U_START``); then a Latin hypercube across the ranges
+(:meth:`Free.spread`: on a log scale for roughnesses and exponents, evenly in
+angle for cosines).
 """
 from __future__ import annotations
 
@@ -158,35 +159,6 @@ def free_parameters(plugin_cls, traversed: list[str]) -> list[Free]:
             hi = min(hi, EXPONENT_MAX)
         out.append(Free(name, key, p.kind == "spectrum", lo, hi, log_start))
     return out
-
-
-def starts(free: list[Free], defaults: dict, count: int, seed: int = 7) -> list[np.ndarray]:
-    """``count`` starting points as flat coordinate vectors: the plugin's
-    defaults; every shape and weight parameter at the low end of its range,
-    then at the high end (the colours at their defaults: a model that contains
-    another as a limit, oren_nayar σ = 0 or cook_torrance k = 1 for lambert,
-    starts once from that limit); then a Latin hypercube across the ranges
-    (each colour channel an axis of its own)."""
-    def flat(values: dict) -> np.ndarray:
-        out = []
-        for f in free:
-            v = values[f.name]
-            out += [f.coordinate(v, U_START)] * (3 if f.colour else 1)
-        return np.array(out)
-
-    base = {f.name: defaults[f.name] for f in free}
-    points = [flat(base)]
-    for end in ("lo", "hi"):
-        ends = {f.name: (base[f.name] if f.colour else getattr(f, end)) for f in free}
-        points.append(flat(ends))
-    n = count - len(points)
-    if n > 0:
-        rng = np.random.default_rng(seed)
-        axes = [(f, c) for f in free for c in range(3 if f.colour else 1)]
-        grid = np.stack([(rng.permutation(n) + rng.random(n)) / n for _ in axes], axis=1)
-        points += [np.array([f.coordinate(f.spread(s), U_START) for (f, _), s in zip(axes, row)])
-                   for row in grid]
-    return points[:count]
 
 
 def split(free: list[Free], u: np.ndarray) -> dict:

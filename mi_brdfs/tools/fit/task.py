@@ -17,7 +17,6 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from . import optimise
-from .optimise import fit_model, problem, relative, values_of  # noqa: F401  (the task's API)
 
 SLICE_ANGLES = (0.0, 30.0, 60.0, 80.0)     # viewer angles of the lobe slices (degrees)
 SLICE_POINTS = 181

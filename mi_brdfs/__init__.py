@@ -2,15 +2,15 @@
 
 ``import mi_brdfs`` finds a working LLVM for Dr.Jit (see ``_llvm``), activates
 the ``llvm_ad_rgb`` variant if no variant is active, and registers every plugin
-(the BSDFs and the ``scanline``/``hdr`` integrators) for the active variant.
+(the BSDFs and the ``scanline`` and ``course`` integrators) for the active variant.
 After switching variants, call ``mi_brdfs.register()``.
 
 Layout: :mod:`mi_brdfs.bsdfs` (the plugins and their shared formulas),
 :mod:`mi_brdfs.render` (integrator, passes, tone mapping, image I/O),
 :mod:`mi_brdfs.tools` (the command line and its reports),
 :mod:`mi_brdfs.scenes` (the bundled scenes: ``mi_brdfs.scenes.path("phong")``). The tools are also
-reachable as ``mi_brdfs.compare``, ``.validate``, ``.bench``, ``.analysis``
-and ``.catalog`` (imported on first use).
+reachable as ``mi_brdfs.compare``, ``.validate``, ``.bench`` and ``.analysis``
+(imported on first use).
 """
 from . import _llvm
 
@@ -26,7 +26,7 @@ from .render import integrator            # noqa: E402
 from . import scenes                      # noqa: E402  (the bundled scenes: scenes.path("phong"))
 
 DEFAULT_VARIANT = "llvm_ad_rgb"
-TOOLS = ("compare", "validate", "bench", "analysis", "catalog", "cli")
+TOOLS = ("compare", "validate", "bench", "analysis", "cli")
 
 __all__ = ["register", "scenes", "PLUGINS", "DEFAULT_VARIANT",
            *(cls.__name__ for cls in bsdfs.PLUGINS), *TOOLS]

@@ -15,7 +15,8 @@ import mitsuba as mi
 import numpy as np
 
 from mi_brdfs.bsdfs import BY_NAME
-from mi_brdfs.tools import analysis, catalog
+from mi_brdfs.bsdfs import cases
+from mi_brdfs.tools import analysis
 
 QUICK = os.environ.get("MI_BRDFS_QUICK") == "1"
 STRATA = (128, 512) if QUICK else (512, 2048)
@@ -25,7 +26,7 @@ ANGLES = (0, 30, 60, 75, 85) if QUICK else (0, 15, 30, 45, 60, 70, 75, 80, 85, 8
 # ## Polar lobes, both modes
 
 # %%
-for name, config in catalog.LOBES.items():
+for name, config in cases.lobe_configs().items():
     fig, axes = plt.subplots(1, 2, subplot_kw={"projection": "polar"}, figsize=(7, 3))
     for ax, mode in zip(axes, ("hdr", "scanline")):
         analysis.polar_lobes(ax, mi.load_dict({**config, "mode": mode}), title=f"{name} ({mode})")
@@ -51,7 +52,7 @@ plt.show()
 # %%
 fig, axes = plt.subplots(1, 2, figsize=(10, 3.5), sharey=True)
 for ax, mode in zip(axes, ("hdr", "scanline")):
-    for name, configs in catalog.FURNACE.items():
+    for name, configs in ((name, cases.report_furnace(name)) for name in cases.ALL):
         label, config = configs[0]
         e = analysis.directional_albedo(mi.load_dict({**config, "mode": mode}), ANGLES, STRATA)
         ax.plot(ANGLES, e, "o-", ms=3, label=name)
@@ -71,15 +72,15 @@ plt.show()
 # `energy_compensation=true` a Kulla-Conty multiple-scattering lobe (and for
 # `oren_nayar` the EON model) returns it: a white configuration reflects 1 at
 # every angle (solid), against the single-scattering model (dashed). One white
-# configuration per compensable model, from the catalog.
+# configuration per compensable model, from its cases.
 
 # %%
 fig, ax = plt.subplots(figsize=(6.5, 3.5))
-for i, (name, configs) in enumerate(catalog.FURNACE.items()):
+for i, (name, configs) in enumerate(((name, cases.report_furnace(name)) for name in cases.ALL)):
     if not BY_NAME[name].compensable:
         continue
     white = [(label, c) for label, c in configs
-             if catalog.promises_one(name, {**c, "energy_compensation": True})]
+             if cases.promises_one(name, {**c, "energy_compensation": True})]
     label, config = white[-1]
     for compensated, style in ((False, "--"), (True, "-")):
         bsdf = mi.load_dict({**config, "energy_compensation": compensated})

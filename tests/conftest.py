@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import mi_brdfs  # noqa: F401  (LLVM set-up, variant, plugin registration)
-from support import BrokenEntry
+from support import BrokenCases
 from support import eval_and_pdf, random_hemisphere, surface, vec  # noqa: F401  (for older modules)
 
 # A command a test runs in a subprocess (mi-brdfs validate, render, ...) that
@@ -16,11 +16,11 @@ os.environ.setdefault("PYTHONFAULTHANDLER", "1")
 
 @pytest.hookimpl(tryfirst=True)
 def pytest_pyfunc_call(pyfuncitem):
-    """A case standing for a catalog entry that could not be built fails, with
+    """A case standing for a model whose cases could not be built fails, with
     that entry's error (see test_battery.from_entries)."""
     for value in pyfuncitem.funcargs.values():
-        if isinstance(value, BrokenEntry):
-            raise RuntimeError(f"the catalog entry of {value.name} cannot be built: "
+        if isinstance(value, BrokenCases):
+            raise RuntimeError(f"the cases of {value.name} cannot be built: "
                                f"{type(value.error).__name__}: {value.error}") from value.error
 
 

@@ -73,6 +73,12 @@ def points(x, y) -> mi.Point2f:
     return from_numpy(mi.Point2f, (x, y))
 
 
+def tensor(a) -> mi.TensorXf:
+    """A NumPy array as a Dr.Jit tensor of the same shape (through from_numpy)."""
+    a = np.asarray(a)
+    return mi.TensorXf(floats(a.ravel()), a.shape)
+
+
 def surface(wi, uv=None) -> mi.SurfaceInteraction3f:
     si = dr.zeros(mi.SurfaceInteraction3f, len(wi))
     si.wi = vec(wi)
@@ -80,9 +86,10 @@ def surface(wi, uv=None) -> mi.SurfaceInteraction3f:
     return si
 
 
-def eval_and_pdf(bsdf, wi, wo, uv=None):
-    """eval (n, 3) and pdf (n,) of a BSDF on direction pairs (NumPy in and out, float64)."""
-    ctx = mi.BSDFContext()
+def eval_and_pdf(bsdf, wi, wo, uv=None, ctx=None):
+    """eval (n, 3) and pdf (n,) of a BSDF on direction pairs (NumPy in and out,
+    float64), in the context ``ctx`` (default: every lobe)."""
+    ctx = ctx or mi.BSDFContext()
     si = surface(wi, uv)
     value = np.array(bsdf.eval(ctx, si, vec(wo)), dtype=np.float64)
     pdf = np.array(bsdf.pdf(ctx, si, vec(wo)), dtype=np.float64)
@@ -327,7 +334,7 @@ def direct_call_failures(config: dict) -> list[str]:
             return np.array(getattr(b, method)(name, si), dtype=np.float64).ravel()
         except RuntimeError:
             return "raises"
-    for name, p in bsdf.params.items():
+    for name, p in bsdf.state.params.items():
         if not bool(np.array(bsdf.has_attribute(name)).ravel()[0]):
             failures.append(f"has_attribute({name!r}) is false")
         one = answer(bsdf, "eval_attribute_1", name)
@@ -351,7 +358,7 @@ def update_failures(config: dict) -> list[str]:
     with those values gives, at a few inputs. Returns the failures."""
     bsdf = mi.load_dict(config)
     params, changed, failures = mi.traverse(bsdf), {}, []
-    for p in bsdf.params.values():
+    for p in bsdf.state.params.values():
         if isinstance(config.get(p.name), float):
             lo = p.lo if p.lo is not None else -1.0
             changed[p.name] = lo + 0.37 * (p.probe_hi() - lo)
@@ -402,7 +409,8 @@ def degenerate_inputs() -> list[tuple]:
 
 def degenerate_configs() -> list[dict]:
     """Every plugin in both modes, every microfacet distribution and geometry,
-    both microfacet samplers, energy compensation, and the models' options."""
+    both microfacet samplers, anisotropic roughness, energy compensation, and
+    the models' options."""
     from mi_brdfs.bsdfs import BY_NAME
     from mi_brdfs.bsdfs.microfacet import DISTRIBUTIONS, GEOMETRIES
     ct = {"type": "cook_torrance", "k": 0.2}
@@ -412,6 +420,8 @@ def degenerate_configs() -> list[dict]:
                if v or (d != "blinn" and g == "smith")]
             + [{"type": name, "energy_compensation": True}
                for name, cls in BY_NAME.items() if cls.compensable]
+            + [{**ct, "distribution": d, "alpha_u": 0.05, "alpha_v": 0.3, "sample_visible": v}
+               for d in ("beckmann", "ggx") for v in (True, False)]
             + [{"type": "ward", "alpha_u": 0.05, "alpha_v": 0.3, "formula": "angles"},
                {"type": "toon", "specular_model": "blinn", "smoothness": 0.2},
                {"type": "oren_nayar", "method": "table"}])
@@ -451,41 +461,42 @@ GPU_VARIANTS = ["cuda_ad_rgb", "cuda_ad_spectral"] if dr.has_backend(dr.JitBacke
 
 
 def variant_chi2_cases() -> list[tuple[dict, float]]:
-    """One χ² configuration per plugin for the variants test: its catalog's
+    """One χ² configuration per plugin for the variants test: its cases'
     first, at its second incident angle."""
-    from mi_brdfs.tools.catalog import ENTRIES
+    from mi_brdfs.bsdfs.cases import ALL as CASES
     out = []
     for cls in mi_brdfs.PLUGINS:
-        case = ENTRIES[cls.name].chi2[0]
+        case = CASES[cls.name].chi2[0]
         out.append((case.config, case.thetas[min(1, len(case.thetas) - 1)]))
     return out
 
 
 def chi2_test_count() -> int:
     """Every χ² test of the suite, for one Šidák correction: the battery's
-    catalog runs and negative controls, and the variants'. (An entry that
+    cases' runs and negative controls, the blends' and the variants'. (An entry that
     cannot be built runs none: its own tests fail.)"""
-    from mi_brdfs.tools import catalog
+    from mi_brdfs.bsdfs import cases
     entries = []
     for cls in mi_brdfs.PLUGINS:
         try:
-            entries.append(catalog.entry(cls.name))
+            entries.append(cases.of(cls.name))
         except Exception:
             pass
     battery = sum(len(c.thetas) for e in entries for c in e.chi2)
     negative = sum(1 for e in entries if e.negative)
-    return battery + negative + len(CPU_VARIANTS + GPU_VARIANTS) * len(mi_brdfs.PLUGINS)
+    blends = len(mi_brdfs.PLUGINS)       # one blendbsdf χ² per plugin (blend_chi2_configs)
+    return battery + negative + blends + len(CPU_VARIANTS + GPU_VARIANTS) * len(mi_brdfs.PLUGINS)
 
 
-class BrokenEntry:
-    """Stands for the test cases of a plugin whose catalog entry cannot be
+class BrokenCases:
+    """Stands for the test cases of a plugin whose cases cannot be
     built: conftest's pytest_pyfunc_call fails each such case with the error."""
 
     def __init__(self, name: str, error: Exception):
         self.name, self.error = name, error
 
     def __repr__(self) -> str:
-        return f"BrokenEntry({self.name!r})"
+        return f"BrokenCases({self.name!r})"
 
 
 def chi2_test(sample_config: dict, pdf_config: dict, theta_deg: float, phi_deg: float = 0.0,
@@ -500,6 +511,165 @@ def chi2_test(sample_config: dict, pdf_config: dict, theta_deg: float, phi_deg: 
     return mi.chi2.ChiSquareTest(domain=mi.chi2.SphericalDomain(), pdf_func=pdf_func,
                                  sample_func=sample_func, sample_dim=3,
                                  sample_count=samples, res=res, ires=ires)
+
+
+# ----------------------------------------------------------------------------
+#  Every plugin at one configuration: adapters, dispatch, renders
+# ----------------------------------------------------------------------------
+
+BLEND_WEIGHT = 0.2        # the weight of the second BSDF (Mitsuba's blendbsdf tests use 0.2)
+
+
+def plugin_configs() -> dict[str, dict]:
+    """{name: configuration} for every registered plugin, in the registry's
+    order: the first interior configuration of its cases without
+    energy compensation (hdr; each parameter given as a number, away from its
+    bounds and from the model's kinks)."""
+    from mi_brdfs.bsdfs.cases import ALL as CASES
+    return {cls.name: dict(next(c for c in CASES[cls.name].interior     # (a copy: Mitsuba
+                                if not c.get("energy_compensation")))   # loads a dict once)
+            for cls in mi_brdfs.PLUGINS}
+
+
+def moved(config: dict) -> dict:
+    """``config`` with every parameter it gives as a number moved 40 % of the
+    way towards the lower end of its range: another configuration of the same
+    plugin (another side of a surface, another scene), still valid and interior."""
+    from mi_brdfs.bsdfs import BY_NAME
+    out = dict(config)
+    for p in BY_NAME[config["type"]].PARAMS:
+        if isinstance(config.get(p.name), float):
+            out[p.name] = p.lo + 0.6 * (config[p.name] - p.lo)
+    return out
+
+
+def numbers(config: dict) -> dict[str, float]:
+    """The parameters ``config`` gives as numbers: {name: value}."""
+    return {k: v for k, v in config.items() if isinstance(v, float)}
+
+
+def neighbour(name: str) -> str:
+    """The plugin after ``name`` in the registry (the last one's is the first):
+    a partner of another kind for adapters that hold two BSDFs."""
+    names = [cls.name for cls in mi_brdfs.PLUGINS]
+    return names[(names.index(name) + 1) % len(names)]
+
+
+def twosided(front: dict, back: dict | None = None) -> dict:
+    """Mitsuba's ``twosided`` around ``front`` (on both sides, mirrored) or
+    with ``back`` on the back side."""
+    return {"type": "twosided", "front": front, **({"back": back} if back else {})}
+
+
+def blend(first: dict, second: dict, weight=BLEND_WEIGHT) -> dict:
+    """Mitsuba's ``blendbsdf``: (1 - weight) · first + weight · second."""
+    return {"type": "blendbsdf", "weight": weight, "bsdf_0": first, "bsdf_1": second}
+
+
+def blend_chi2_configs() -> dict[str, dict]:
+    """{plugin: blendbsdf config}: every plugin (:func:`plugin_configs`)
+    blended with weight :data:`BLEND_WEIGHT` into Mitsuba's ``roughdielectric``
+    (α 0.5), whose sampler the blend mixes with the plugin's; the χ² of each
+    runs at :data:`BLEND_CHI2_THETA` (tests/bsdfs/test_adapters.py)."""
+    return {name: blend(config, {"type": "roughdielectric", "alpha": 0.5})
+            for name, config in plugin_configs().items()}
+
+
+BLEND_CHI2_THETA = 50.0      # the viewer of the blends' χ² tests, degrees
+
+
+def mirrored(v: np.ndarray) -> np.ndarray:
+    """Directions reflected through the surface (z negated)."""
+    return v * [1.0, 1.0, -1.0]
+
+
+def sampled(bsdf, wi, rng, ctx=None) -> dict[str, np.ndarray]:
+    """sample() at viewers ``wi`` (NumPy, (n, 3)) with uniform random numbers
+    from ``rng``, and eval_pdf, eval and pdf at the sampled directions, in the
+    context ``ctx``: {"wo" (n, 3), "pdf" (n,), "weight" (n, 3), "value"
+    (n, 3), "value_pdf" (n,), "eval" (n, 3), "pdf_at" (n,), "u" the numbers}
+    as float64."""
+    ctx = ctx or mi.BSDFContext()
+    n = len(wi)
+    u = rng.random((n, 3))
+    si = surface(wi)
+    bs, weight = bsdf.sample(ctx, si, floats(u[:, 0]), points(u[:, 1], u[:, 2]))
+    value, value_pdf = bsdf.eval_pdf(ctx, si, bs.wo)
+    out = {"wo": bs.wo, "pdf": bs.pdf, "weight": weight, "value": value, "value_pdf": value_pdf,
+           "eval": bsdf.eval(ctx, si, bs.wo), "pdf_at": bsdf.pdf(ctx, si, bs.wo)}
+    dr.eval(*out.values())
+    out = {k: np.array(v, dtype=np.float64) for k, v in out.items()}
+    out = {k: v.T if v.ndim == 2 else v for k, v in out.items()}
+    return {**out, "u": u}
+
+
+def assert_weight_is_value_over_pdf(s: dict[str, np.ndarray], what: str = "") -> None:
+    """A :func:`sampled` record is consistent: eval_pdf is (eval, pdf); where
+    the sample holds (pdf > 0) weight · pdf = eval and pdf() is the sample's
+    pdf; a failed sample weighs 0. Tolerances of the battery."""
+    np.testing.assert_allclose(s["value"], s["eval"], rtol=1e-6, atol=1e-8, err_msg=what)
+    np.testing.assert_allclose(s["value_pdf"], s["pdf_at"], rtol=1e-6, atol=1e-8, err_msg=what)
+    ok = s["pdf"] > 0
+    assert ok.mean() > 0.3, f"{what}: {ok.mean():.0%} of the samples hold"
+    np.testing.assert_allclose(s["weight"][ok] * s["pdf"][ok, None], s["value"][ok],
+                               rtol=1e-4, atol=1e-6, err_msg=what)
+    np.testing.assert_allclose(s["pdf_at"][ok], s["pdf"][ok], rtol=1e-4, err_msg=what)
+    assert not s["weight"][~ok].any(), what
+
+
+TILE_PIXELS = 6           # pixels along each side of a tile of tiles_scene
+
+
+def tiles_scene(bsdfs: dict[str, dict], integrator: dict, spp: int = 4,
+                env: float = 0.0, backs=()) -> dict:
+    """A row of unit square tiles in the plane z = 0, one per BSDF (keyed by
+    name: the tile's shape is that name), seen from straight above (a camera
+    whose view spans the row: the plane maps linearly onto the image) so that
+    tile i fills the columns [i, i + 1) × :data:`TILE_PIXELS`. Above each
+    tile, at height 0.5, a point light: a tile sees its own light from its
+    normal to 55° and the other tiles' lights towards grazing. With ``env``,
+    a constant environment too; the tiles named in ``backs`` are turned over
+    (their back faces the camera and the lights). (Not Mitsuba's orthographic
+    camera: 3.9.1's does not record in a frozen function.)"""
+    T = mi.ScalarTransform4f
+    k = len(bsdfs)
+    height = max(4.0, k / 2)          # (a field of view of at most 90°)
+    scene = {"type": "scene", "integrator": integrator,
+             "sensor": {"type": "perspective", "fov_axis": "x",
+                        "fov": 2 * math.degrees(math.atan(k / 2 / height)),
+                        "to_world": T().look_at(origin=[0, 0, height], target=[0, 0, 0],
+                                                up=[0, 1, 0]),
+                        "film": {"type": "hdrfilm", "width": k * TILE_PIXELS,
+                                 "height": TILE_PIXELS, "rfilter": {"type": "box"}},
+                        "sampler": {"type": "independent", "sample_count": spp}}}
+    for i, (name, bsdf) in enumerate(bsdfs.items()):
+        x = i - (k - 1) / 2
+        scene[name] = {"type": "rectangle", "bsdf": bsdf,
+                       "to_world": T().translate([x, 0.0, 0.0]) @ T().scale(0.5)
+                       @ T().rotate([1, 0, 0], 180 if name in backs else 0)}
+        scene[f"{name}_light"] = {"type": "point", "position": [x, 0.0, 0.5],
+                                  "intensity": {"type": "rgb", "value": 0.5}}
+    if env:
+        scene["env"] = {"type": "constant", "radiance": {"type": "rgb", "value": env}}
+    return scene
+
+
+def tile(image, i: int):
+    """The pixels of tile i of a :func:`tiles_scene` image (a tensor or array)."""
+    return image[:, i * TILE_PIXELS:(i + 1) * TILE_PIXELS]
+
+
+@contextlib.contextmanager
+def jit_flags(flags: dict):
+    """Run the block with these Dr.Jit flags ({dr.JitFlag: bool}), then restore them."""
+    before = {flag: dr.flag(flag) for flag in flags}
+    for flag, value in flags.items():
+        dr.set_flag(flag, value)
+    try:
+        yield
+    finally:
+        for flag, value in before.items():
+            dr.set_flag(flag, value)
 
 
 # ----------------------------------------------------------------------------

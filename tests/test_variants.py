@@ -39,7 +39,7 @@ cases, folder = json.loads(sys.argv[4]), sys.argv[6]
 sys.path.insert(0, sys.argv[5])                 # the tests' support module
 from support import (degenerate_configs, degenerate_lanes, direct_call_failures,
                      lambert_diffuse_difference, property_form_failures, update_failures)
-from mi_brdfs.tools.catalog import ENTRIES
+from mi_brdfs.bsdfs.cases import ALL as CASES
 rng = np.random.default_rng(7)
 N = 64
 v = rng.normal(size=(N, 3)); v /= np.linalg.norm(v, axis=1, keepdims=True); v[:, 2] = np.abs(v[:, 2])
@@ -135,7 +135,7 @@ for config, theta in cases:
     if variant != "llvm_ad_rgb":       # (the battery's variant runs them itself)
         r["forms"] = property_form_failures(config["type"], folder)
         r["calls"] = direct_call_failures(config)
-    r["update"] = update_failures(ENTRIES[config["type"]].interior[0])
+    r["update"] = update_failures(CASES[config["type"]].interior[0])
     results[config["type"]] = r
 checks = {}
 if variant != "llvm_ad_rgb":
@@ -258,3 +258,68 @@ def test_render_in_scalar_rgb(tmp_path):
     import mitsuba as mi
     image = np.array(mi.Bitmap(str(out)))
     assert image.shape[:2] == (8, 8) and np.isfinite(image).all() and image.max() > 0
+
+
+def bitmap_reflectance(value: float) -> dict:
+    """A 4 x 4 RGB bitmap texture of one grey value (a new mi.Bitmap each time:
+    in spectral variants the texture upsamples the bitmap it is given in place)."""
+    import mitsuba as mi
+    return {"type": "bitmap", "bitmap": mi.Bitmap(np.full((4, 4, 3), value, dtype=np.float32))}
+
+
+@pytest.mark.parametrize("variant", ["llvm_ad_spectral", "scalar_spectral"])
+def test_spectral_bitmap_above_one(variant, capfd):
+    """In spectral variants a bitmap's values above 1 are clamped to 1 when the
+    texture is built, as for Mitsuba's diffuse: lambert reads it as diffuse
+    does, and says so once, naming itself and the parameter; a bitmap below 1
+    gets no word."""
+    import drjit as dr
+    import mitsuba as mi
+    from support import active_variant
+    with active_variant(variant):
+        si = dr.zeros(mi.SurfaceInteraction3f)
+        si.wi, si.uv = mi.Vector3f(0, 0, 1), mi.Point2f(0.5, 0.5)
+        si.wavelengths = mi.UnpolarizedSpectrum(550.0)
+        capfd.readouterr()
+        values = {}
+        for value in (3.0, 0.5):
+            for plugin in ("diffuse", "lambert"):
+                bsdf = mi.load_dict({"type": plugin, "reflectance": bitmap_reflectance(value)})
+                values[plugin, value] = np.array(bsdf.eval(mi.BSDFContext(), si,
+                                                           mi.Vector3f(0.0, 0.6, 0.8)))
+                said = "".join(capfd.readouterr())        # (Mitsuba logs to stdout)
+                if plugin == "lambert":
+                    warned = "lambert: parameter 'reflectance': 16 pixel(s)" in said
+                    assert warned == (value > 1), said
+                    assert said.count("spectral upsampling clamps") == (value > 1), said
+        for value in (3.0, 0.5):
+            np.testing.assert_allclose(values["lambert", value], values["diffuse", value],
+                                       rtol=1e-6)
+        np.testing.assert_allclose(values["lambert", 3.0], 0.8 / np.pi, rtol=1e-5)
+
+
+def test_plain_numbers_read_as_floats_in_scalar_variants():
+    """In scalar variants every plain-number parameter of every plugin reads as
+    a Python float through mi.traverse, as a built-in's does (dielectric's eta),
+    and can be written and updated: the new value is what the plugin uses, and
+    a bad one is refused at update() as at load time."""
+    import mitsuba as mi
+    from mi_brdfs.bsdfs import PLUGINS
+    from mi_brdfs.bsdfs.params import ParameterError
+    from support import active_variant
+    with active_variant("scalar_rgb"):
+        assert type(mi.traverse(mi.load_dict({"type": "dielectric"}))["eta"]) is float
+        plain = [(cls.name, p) for cls in PLUGINS for p in cls.PARAMS if p.kind == "float"]
+        assert plain                                     # (k, f0, smoothness)
+        for name, p in plain:
+            bsdf = mi.load_dict({"type": name})
+            params = mi.traverse(bsdf)
+            assert type(params[p.name]) is float, (name, p.name, type(params[p.name]))
+            value = 0.5 * (p.lo + p.hi)
+            params[p.name] = value
+            params.update()
+            assert params[p.name] == pytest.approx(value)
+            assert getattr(bsdf, "m_" + p.name) == pytest.approx(value)
+            params[p.name] = p.hi + 1.0
+            with pytest.raises(ParameterError, match=f"{name}: parameter '{p.name}'"):
+                params.update()

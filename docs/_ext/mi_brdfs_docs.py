@@ -1,8 +1,8 @@
 """The pages of the documentation that are generated from the code, never written by hand.
 
 - one page per BSDF plugin (``_generated/plugins/<name>.rst``): the plugin's
-  module docstring (its parameter table is itself generated from ``PARAMS``
-  and ``OPTIONS``, see :func:`mi_brdfs.bsdfs.base.parameter_table`), its
+  module docstring, its ``.. parameters::`` line replaced by the table
+  generated from ``PARAMS`` and the options (:func:`parameter_table`), its
   bundled scene, the scene's renders in both modes and its lobe plot from the
   committed validation report;
 - the command-line reference (``_generated/cli.rst``), from the argparse
@@ -47,13 +47,59 @@ def _image(path: str, alt: str, width: str | None = None) -> str:
 
 
 # ----------------------------------------------------------------------------
+#  The parameter table of each plugin's page, from its declarations
+# ----------------------------------------------------------------------------
+
+PARAMETERS = ".. parameters::"     # the line of a model's docstring that becomes its table
+FORMS = {"spectrum": "float, rgb, spectrum or texture", "scalar": "float or texture",
+         "float": "float"}
+
+
+def _range(lo, hi) -> str:
+    if lo is not None and hi is not None:
+        return f" in [{lo:g}, {hi:g}]"
+    if lo is not None:
+        return f" >= {lo:g}"
+    return f" <= {hi:g}" if hi is not None else ""
+
+
+def _row(name: str, kind: str, doc: str, default: str) -> list[str]:
+    lines = textwrap.wrap(" ".join(doc.split()), 66) or [""]
+    return [f"   * - ``{name}``", f"     - {kind}", f"     - {lines[0]}",
+            *(f"       {line}" for line in lines[1:]), f"     - {default}"]
+
+
+def parameter_table(cls) -> str:
+    """The reStructuredText table of a plugin's parameters and options, made
+    from its declarations (``PARAMS``, the model's ``OPTIONS``, then the
+    base's): the one source of the plugin's parameter documentation."""
+    rows = [".. list-table::", "   :header-rows: 1", "   :widths: 20 20 50 10", "",
+            "   * - Parameter", "     - Type", "     - Description", "     - Default"]
+    for p in cls.PARAMS:
+        kind = FORMS[p.kind] + _range(p.lo, p.hi) + " (∂)"
+        rows += _row(p.name, kind, p.doc, "none" if p.optional else f"{p.default:g}")
+    for o in cls.OPTIONS + tuple(o for o in cls.all_options() if o not in cls.OPTIONS):
+        doc = o.doc
+        if isinstance(o.default, bool):
+            kind, default = "boolean", str(o.default).lower()
+        elif isinstance(o.default, int):
+            kind, default = "integer" + _range(o.lo, o.hi), str(o.default)
+        else:
+            kind, default = "string", f'``"{o.default}"``'
+            doc += " One of " + ", ".join(f'``"{c}"``' for c in o.choices) + "."
+        rows += _row(o.name, kind, doc, default)
+    return "\n".join(rows)
+
+
+# ----------------------------------------------------------------------------
 #  Plugins
 # ----------------------------------------------------------------------------
 
 def plugin_page(cls) -> str:
     module = inspect.getmodule(cls)
     name = cls.name
-    parts = [f".. _plugin-{name}:", "", inspect.getdoc(module).strip(), ""]
+    doc = inspect.getdoc(module).strip().replace(PARAMETERS, parameter_table(cls))
+    parts = [f".. _plugin-{name}:", "", doc, ""]
     renders = [f"scenes/renders/{name}_{mode}.png" for mode in ("scanline", "hdr")]
     if all(os.path.exists(os.path.join(ROOT, r)) for r in renders):
         parts += ["Renders", "-------", "",

@@ -1,12 +1,15 @@
 """The course's BRDF models as Mitsuba BSDF plugins, one module per model.
 
-- :mod:`.base` — what every plugin does alike (parameters, modes, lobes, sampling);
 - the models, in the lecture's order: :mod:`.lambert`, :mod:`.oren_nayar`,
   :mod:`.toon` (diffuse), :mod:`.phong`, :mod:`.blinn`, :mod:`.ward`,
-  :mod:`.cook_torrance` (specular);
+  :mod:`.cook_torrance` (specular); each declares what runs of it
+  (:mod:`.cases`). What a model supplies: :mod:`.model`;
+- what every plugin does alike: :mod:`.base` (the ``mi.BSDF`` glue),
+  :mod:`.params` (declaring, reading and checking parameters), :mod:`.lobes`
+  (the lobes' algebra and mixture), :mod:`.compensation` (the
+  multiple-scattering lobe and its tables, shipped in ``data/``);
 - the shared formulas: :mod:`.microfacet` (D, F, G), :mod:`.powercos`
-  (power-cosine lobes in float32), :mod:`.energy` (energy compensation and
-  its albedo tables, shipped in ``data/``), :mod:`.grid` (tabulated functions).
+  (power-cosine lobes in float32), :mod:`.grid` (tabulated functions).
 """
 from __future__ import annotations
 
@@ -20,10 +23,10 @@ from .toon import Toon
 from .ward import Ward
 
 # The registry, in the lecture's order: diffuse models, then specular ones.
-# Everything else derives from it: the package's exports, the plugins
-# registered with Mitsuba, the catalog's entries (tools/catalog.py), the lobe
-# plots, the bench's models and the tests (tests/bsdfs/test_registry.py says
-# where a model is missing).
+# Everything else derives from it and from each model's own module: the
+# package's exports, the plugins registered with Mitsuba, the cases the tests,
+# the validation report, the bench and the fit run (each model's cases()),
+# the documentation (tests/bsdfs/test_registry.py says where a model is missing).
 PLUGINS = (Lambert, OrenNayar, Toon, Phong, Blinn, Ward, CookTorrance)
 BY_NAME = {cls.name: cls for cls in PLUGINS}     # plugin name -> class
 

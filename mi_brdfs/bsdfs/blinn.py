@@ -126,6 +126,7 @@ def pdf_lobe(wi, wo, gamma):
 # ----------------------------------------------------------------------------
 
 class Blinn(Phong):
+    __doc__ = __doc__                  # the module's documentation, for help()
     # Phong's plugin glue (parameters, lobes, sampling) with Blinn's formulas.
     name = "blinn"
     PARAMS = Phong.PARAMS[:2] + (replace(

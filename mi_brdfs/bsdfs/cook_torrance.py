@@ -24,7 +24,7 @@ is no diffuse lobe, with k = 1 (or m_S = 0) no specular one.
 
 **Energy compensation** (``energy_compensation``): the reciprocal
 multiple-scattering lobe of Kulla & Conty 2017 / Turquin 2019
-(:mod:`mi_brdfs.bsdfs.energy`) whose albedo is what single scattering misses
+(:mod:`mi_brdfs.bsdfs.compensation`) whose albedo is what single scattering misses
 of the random walk on the Smith microsurface (Heitz, Hanika, d'Eon &
 Dachsbacher 2016) with Schlick's F at every bounce, tabulated over
 (cos θ, α, F0) for every α (to ∞): the specular lobe reflects m_S·W(θ, α, F0),
@@ -47,14 +47,19 @@ albedo is k·m_D + (1 - k)·(the compensated specular).
 """
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
 import drjit as dr
 import mitsuba as mi
 
-from . import energy, lambert, microfacet as mf
-from .base import BRDF, Option, Param, Reader, Scaled, mean
+from . import compensation, lambert, microfacet as mf
+from .base import BRDF
+from .cases import (THETAS_GRAZING, THETAS_LOW, Cases, Chi2, Furnace, Pictures, Twin, preserves,
+                    rgb)
 from .grid import Axis
+from .lobes import Scaled, mean
+from .params import Option, Param, Reader
 
 
 # ----------------------------------------------------------------------------
@@ -134,6 +139,11 @@ def pdf_lobe(wi, wo, alpha, distribution: str, visible: bool = True):
 #  The plugin
 # ----------------------------------------------------------------------------
 
+def roughness(tex, si, active, hi: float = mf.ALPHA_MAX):
+    """A roughness texture's value clamped to [ALPHA_MIN, hi]."""
+    return dr.fmin(dr.fmax(tex.eval_1(si, active), mf.ALPHA_MIN), hi)
+
+
 # Energy compensation (:mod:`.energy`): the single-scattering albedo of each
 # D x G with F = 1 and with F0 = 0 (E_ss is linear in F0) over (mu, alpha), and
 # the random walk's W over (mu, alpha, F0) of the Smith microsurfaces. alpha
@@ -150,13 +160,13 @@ WALK_AXES = (MU_AXIS, ALPHA_AXIS, F0_AXIS)
 WALK_DISTRIBUTION = {"ggx": "ggx", "beckmann": "beckmann", "blinn": "beckmann"}
 
 
-def spec(distribution: str, geometry: str, f0: float = 1.0) -> energy.AlbedoSpec:
+def spec(distribution: str, geometry: str, f0: float = 1.0) -> compensation.AlbedoSpec:
     """The single-scattering albedo table of D x G with Schlick's F0 (1 or 0);
     Blinn's beyond alpha = 1 extrapolated (its alpha <= 1)."""
     hi = 1.0 if distribution == "blinn" else float("inf")
     alpha = lambda a: dr.fmin(dr.fmax(a, mf.ALPHA_MIN), hi)
     name = f"cook_torrance/{distribution}/{geometry}" + ("" if f0 == 1.0 else f"/f0={f0:g}")
-    return energy.AlbedoSpec(
+    return compensation.AlbedoSpec(
         name, ALBEDO_AXES,
         f=lambda wi, wo, a: specular(wi, wo, alpha(a), f0, distribution, geometry),
         sample=lambda wi, u, a: sample_lobe(wi, u, alpha(a), distribution),
@@ -164,21 +174,21 @@ def spec(distribution: str, geometry: str, f0: float = 1.0) -> energy.AlbedoSpec
         valid_up_to=None if distribution != "blinn" else 1.0)
 
 
-def walk_spec(distribution: str) -> energy.WalkSpec:
+def walk_spec(distribution: str) -> compensation.WalkSpec:
     """The random walk's albedo table of the Smith microsurface nearest to D."""
     smith = WALK_DISTRIBUTION[distribution]
-    return energy.WalkSpec(f"walk/{smith}", smith, WALK_AXES)
+    return compensation.WalkSpec(f"walk/{smith}", smith, WALK_AXES)
 
 
-def compensation(distribution: str, geometry: str) -> energy.Table:
-    """g(mu, alpha, F0) = W - E_ss (see :func:`.energy.microfacet`)."""
-    return energy.microfacet(spec(distribution, geometry), spec(distribution, geometry, 0.0),
-                             walk_spec(distribution))
+def walk_residual(distribution: str, geometry: str) -> compensation.Table:
+    """g(mu, alpha, F0) = W - E_ss (see :func:`.compensation.walk_residual`)."""
+    return compensation.walk_residual(spec(distribution, geometry),
+                                      spec(distribution, geometry, 0.0), walk_spec(distribution))
 
 
 class CookTorrance(BRDF):
+    __doc__ = __doc__                  # the module's documentation, for help()
     name = "cook_torrance"
-    compensable = True
     OPTIONS = (
         Option("distribution", "beckmann", mf.DISTRIBUTIONS, doc="D, the distribution term."),
         Option("geometry", "cook_torrance", mf.GEOMETRIES,
@@ -202,19 +212,46 @@ class CookTorrance(BRDF):
         Param("alpha", 0.3, 0.0, None, kind="scalar", role="shape", upper=1.0,
               doc="the lecture's roughness ρ (<= 1 for ``blinn``); values below "
                   "``ALPHA_MIN`` = 1e-4 (0, the perfectly smooth surface, included) are "
-                  "clamped to it, as Mitsuba and pbrt do."),
+                  "clamped to it, as Mitsuba and pbrt do, and values above ``ALPHA_MAX`` = "
+                  "1e6 to that (the lobe's limit: it reflects nothing by itself). Giving it "
+                  "together with ``alpha_u`` or ``alpha_v`` is an error."),
+        Param("alpha_u", 0.3, 0.0, None, kind="scalar", role="shape", upper=1.0,
+              doc="anisotropic roughness along the tangent: Mitsuba's shading-frame ``s`` "
+                  "axis (local x, along dp/du), as ``roughconductor``'s ``alpha_u``; "
+                  "``beckmann`` and ``ggx`` only. Clamped to [``ALPHA_MIN``, "
+                  "``ALPHA_MAX_ANISOTROPIC`` = 1e4]."),
+        Param("alpha_v", 0.3, 0.0, None, kind="scalar", role="shape", upper=1.0,
+              doc="anisotropic roughness along the bitangent (local y), as "
+                  "``roughconductor``'s ``alpha_v``. Either one given sets the other to "
+                  "its default 0.3."),
     )
 
     def read(self, reader: Reader) -> None:
+        props = reader.props
+        self.anisotropic = "alpha_u" in props or "alpha_v" in props
+        if self.anisotropic:
+            if "alpha" in props:
+                raise reader.error("alpha", props["alpha"],
+                                   "either alpha or alpha_u/alpha_v, not both")
+            if self.options.distribution == "blinn":
+                name = "alpha_u" if "alpha_u" in props else "alpha_v"
+                raise reader.error(name, props[name], 'distribution "beckmann" or "ggx" '
+                                   "(Blinn's D is isotropic here: give alpha)")
+            if self.options.energy_compensation:
+                raise reader.error("energy_compensation", True, "false with alpha_u/alpha_v "
+                                   "(no anisotropic table yet)")
+        given = ("alpha_u", "alpha_v") if self.anisotropic else ("alpha",)
         for p in self.PARAMS:
-            if p.name == "alpha" and self.distribution == "blinn":
+            if p.name.startswith("alpha") and p.name not in given:
+                continue
+            if p.name == "alpha" and self.options.distribution == "blinn":
                 p = replace(p, hi=1.0)                       # Blinn: 2/rho² - 2 >= 0
             self.read_param(reader, p)
-        if self.distribution == "blinn" and self.geometry == "smith":
+        if self.options.distribution == "blinn" and self.options.geometry == "smith":
             self.m_g1_blinn = mf.g1_blinn_grid().data        # traversed: frozen functions
 
     @classmethod
-    def albedo_specs(cls) -> list:
+    def tables(cls) -> list:
         return ([spec(d, g, f0) for d in mf.DISTRIBUTIONS for g in mf.GEOMETRIES
                  for f0 in (1.0, 0.0)] + [walk_spec(d) for d in ("ggx", "beckmann")])
 
@@ -222,57 +259,250 @@ class CookTorrance(BRDF):
     def has_diffuse(self) -> bool:
         return not (self.off("k", 0.0) or self.off("diffuse_reflectance"))
 
-    def has_specular(self) -> bool:
+    def has_glossy(self) -> bool:
         return not (self.off("k", 1.0) or self.off("specular_reflectance"))
 
     def eval_textures(self, si, active):
-        return self.with_colours(si, active,
-                                 alpha=dr.fmax(self.m_alpha.eval_1(si, active), mf.ALPHA_MIN))
+        # an anisotropic roughness is a pair (alpha_u, alpha_v): see .microfacet
+        if self.anisotropic:
+            hi = mf.ALPHA_MAX_ANISOTROPIC
+            alpha = (roughness(self.m_alpha_u, si, active, hi),
+                     roughness(self.m_alpha_v, si, active, hi))
+        else:
+            alpha = roughness(self.m_alpha, si, active)
+        return self.colours(si, active, alpha=alpha)
 
     def lobe_weights(self, inp):
         k = self.switch("k")
         return k, 1.0 - k
 
     def f_diffuse(self, inp, si, wo):
-        return lambert.f(inp.colour_d, mi.Frame3f.cos_theta(wo), self.mode)
+        return lambert.f(inp.colour_d, mi.Frame3f.cos_theta(wo), self.options.mode)
 
-    def f_specular(self, inp, si, wo):
+    def f_glossy(self, inp, si, wo):
+        o = self.options
         return Scaled(inp.colour_s, specular(si.wi, wo, inp.alpha, self.switch("f0"),
-                                             self.distribution, self.geometry))
+                                             o.distribution, o.geometry))
 
     def selection_weights(self, inp, si):
         w_d = w_s = mi.Float(0.0)
-        if self.diffuse:
-            w_d = self.m_k * lambert.albedo(mean(inp.colour_d), self.mode)
-        if self.specular:
+        lobes = self.state.plan.lobes
+        if lobes.diffuse:
+            w_d = self.m_k * lambert.albedo(mean(inp.colour_d), self.options.mode)
+        if lobes.glossy:
             fresnel = mf.fresnel_schlick(self.m_f0, mi.Frame3f.cos_theta(si.wi))
             w_s = (1.0 - self.m_k) * mean(inp.colour_s) * fresnel
         return w_d, w_s
 
-    # --- specular sampling ----------------------------------------------------
-    def sample_specular(self, inp, si, sample2):
-        return sample_lobe(si.wi, sample2, inp.alpha, self.distribution, self.sample_visible)
+    # --- glossy sampling ----------------------------------------------------------
+    def sample_glossy(self, inp, si, sample2):
+        o = self.options
+        return sample_lobe(si.wi, sample2, inp.alpha, o.distribution, o.sample_visible)
 
-    def pdf_specular(self, inp, si, wo):
-        return pdf_lobe(si.wi, wo, inp.alpha, self.distribution, self.sample_visible)
+    def pdf_glossy(self, inp, si, wo):
+        o = self.options
+        return pdf_lobe(si.wi, wo, inp.alpha, o.distribution, o.sample_visible)
 
-    def f_pdf_specular(self, inp, si, wo):
-        f, p, ratio = lobe(si.wi, wo, inp.alpha, self.distribution, self.switch("f0"),
-                           self.geometry, self.sample_visible)
+    def f_pdf_glossy(self, inp, si, wo):
+        o = self.options
+        f, p, ratio = lobe(si.wi, wo, inp.alpha, o.distribution, self.switch("f0"), o.geometry,
+                           o.sample_visible)
         return Scaled(inp.colour_s, f, ratio), p
 
-    # --- energy compensation ----------------------------------------------------
-    def albedo_spec(self) -> energy.AlbedoSpec:
-        return spec(self.distribution, self.geometry)
+    # --- energy compensation: what single scattering misses of the random walk ---
+    def compensation(self) -> compensation.Compensation:
+        return compensation.Tabulated(
+            walk_residual(self.options.distribution, self.options.geometry),
+            parameters=lambda inp: (inp.alpha, self.m_f0), sources=("alpha", "f0"),
+            colour=lambda inp: inp.colour_s)
 
-    def compensation(self) -> energy.Table:
-        return compensation(self.distribution, self.geometry)
-
-    def table_parameters(self, inp):
-        return (inp.alpha, self.m_f0)
-
-    def table_sources(self):
-        return ("alpha", "f0")
-
-    def ms_colour(self, inp):
-        return inp.colour_s
+    # --- what runs of it: the tests, the validation report, the bench, the pictures ---
+    @classmethod
+    def cases(cls) -> Cases:
+        c = {"type": "cook_torrance"}
+        chi2 = [Chi2({**c, "distribution": d, "alpha": a, "k": k}, (0, 45, 85),
+                     quick=(d, a, k) in (("ggx", 0.1, 0.5), ("beckmann", 0.5, 0.0)))
+                for d in mf.DISTRIBUTIONS for a in (0.1, 0.5) for k in (0.0, 0.5)]
+        chi2 += [
+            # The Smith term and the scanline clamp change the weights, not the sampler.
+            Chi2({**c, "distribution": "ggx", "alpha": 0.5, "k": 0.0, "geometry": "smith"}, (60,)),
+            Chi2({**c, "distribution": "beckmann", "alpha": 0.1, "k": 0.5, "geometry": "smith"},
+                 (85,)),
+            Chi2({**c, "distribution": "blinn", "alpha": 0.3, "k": 0.5, "geometry": "smith",
+                  "mode": "scanline", "diffuse_reflectance": rgb([0.9, 0.2, 0.1]), "f0": 0.5}, (30,)),
+            # The other samplers: full-distribution microfacet sampling and cosine sampling.
+            *[Chi2({**c, "distribution": d, "alpha": 0.3, "k": 0.3, "sample_visible": False}, (60,))
+              for d in ("beckmann", "ggx")],
+            Chi2({**c, "distribution": "ggx", "alpha": 0.3, "k": 0.3, "sampling": "cosine"}, (45,)),
+            # The compensation lobe, picked in proportion to its weight.
+            Chi2({**c, "distribution": "ggx", "geometry": "smith", "alpha": 0.6, "k": 0.0,
+                  "energy_compensation": True}, (0, 45, 85)),
+            Chi2({**c, "distribution": "blinn", "alpha": 0.8, "k": 0.3,
+                  "energy_compensation": True}, (60,)),
+        ]
+        # As a perfect conductor (k = 0, F0 = 1, Smith: roughconductor's lobe), at the
+        # settings of Mitsuba 3.9.1's own roughconductor χ² tests: a viewer along
+        # (1, 1, 1) (θ = 54.74°, φ = 45°), α 0.05 at res 140, ires 32; both samplers of
+        # Beckmann and GGX at α 0.2 and 0.05 (the axes of its anisotropic lobe; ours is
+        # isotropic), res 101, ires 16 (Beckmann) and 8 (GGX).
+        conductor = {**c, "k": 0.0, "f0": 1.0, "geometry": "smith"}     # roughconductor's lobe
+        diagonal = math.degrees(math.acos(1.0 / math.sqrt(3.0)))
+        chi2 += [Chi2({**conductor, "distribution": "beckmann", "alpha": 0.05}, (diagonal,), phi=45.0,
+                      res=140, ires=32)]
+        chi2 += [Chi2({**conductor, "distribution": d, "alpha": a, "sample_visible": v}, (diagonal,),
+                      phi=45.0, res=101, ires=16 if d == "beckmann" else 8)
+                 for d in ("beckmann", "ggx") for v in (False, True) for a in (0.2, 0.05)]
+        # Anisotropic (alpha_u along s, alpha_v along t): Mitsuba's anisotropic
+        # roughconductor settings (alpha_u 0.2, alpha_v 0.05 at the diagonal viewer), and
+        # both orientations seen from azimuths off the axes, with a diffuse lobe beside.
+        chi2 += [Chi2({**conductor, "distribution": d, "alpha_u": 0.2, "alpha_v": 0.05,
+                       "sample_visible": v}, (diagonal,), phi=45.0, res=101,
+                      ires=16 if d == "beckmann" else 8, quick=(d, v) == ("ggx", True))
+                 for d in ("beckmann", "ggx") for v in (False, True)]
+        chi2 += [Chi2({**c, "distribution": d, "geometry": "smith", "alpha_u": au,
+                       "alpha_v": av, "k": 0.3, "sample_visible": v}, (0, 45, 85), phi=30.0)
+                 for d in ("beckmann", "ggx") for au, av in ((0.05, 0.4), (0.6, 0.1))
+                 for v in (True, False)]
+        consistency = [{**c, "distribution": d, "geometry": g, "alpha": a, "k": k}
+                       for d in mf.DISTRIBUTIONS for g in mf.GEOMETRIES
+                       for a, k in ((0.1, 0.0), (0.5, 0.5), (1.0, 0.3))]
+        consistency += [
+            {**c, "mode": "scanline", "distribution": "beckmann", "alpha": 0.2, "k": 0.4, "f0": 0.8,
+             "diffuse_reflectance": rgb([1.5, 0.3, 0.0]),
+             "specular_reflectance": rgb([0.9, 0.9, 2.0])},
+            {**c, "distribution": "ggx", "alpha": 0.3, "k": 1.0},          # diffuse only
+            {**c, "distribution": "ggx", "alpha": 0.0, "k": 0.0},          # alpha clamped
+            {**c, "distribution": "beckmann", "alpha": 0.4, "k": 0.2, "sample_visible": False},
+            {**c, "distribution": "ggx", "alpha": 0.2, "k": 0.0, "sampling": "cosine"},
+            {**c, "distribution": "ggx", "geometry": "smith", "alpha": 0.7, "k": 0.2, "f0": 0.5,
+             "specular_reflectance": rgb([0.95, 0.64, 0.54]), "energy_compensation": True},
+        ]
+        furnace = []
+        for d in mf.DISTRIBUTIONS:
+            for g in mf.GEOMETRIES:
+                for a in (0.1, 0.3, 0.6, 1.0):
+                    for f0 in (1.0, None):          # None: the default f0 (0.04)
+                        for k in (0.0, 0.5):
+                            config = {**c, "distribution": d, "geometry": g, "alpha": a, "k": k,
+                                      "diffuse_reflectance": 1.0, "specular_reflectance": 1.0,
+                                      **({} if f0 is None else {"f0": f0})}
+                            for group, thetas in (("low", THETAS_LOW), ("grazing", THETAS_GRAZING)):
+                                label = (f"{d}, {g}, α = {a}, F0 = {f0 or 'default'}, k = {k}, "
+                                         f"{group} angles")
+                                # the diffuse lobe alone reflects k: the bound is [k, 1]
+                                furnace.append(Furnace(label, config, lo=k, thetas=thetas))
+        for d in mf.DISTRIBUTIONS:
+            for g in mf.GEOMETRIES:
+                for a in (0.05, 0.2, 0.6, 1.0):
+                    furnace.append(preserves(
+                        f"compensated, {d}, {g}, α = {a}",
+                        {**c, "distribution": d, "geometry": g, "alpha": a, "k": 0.0, "f0": 1.0,
+                         "specular_reflectance": 1.0, "energy_compensation": True}))
+        for d in ("beckmann", "ggx"):                  # the roughness they accept beyond 1
+            for g in mf.GEOMETRIES:
+                for a in (1.5, 3.0, 10.0, 30.0, 1e3):
+                    furnace.append(preserves(
+                        f"compensated, {d}, {g}, α = {a} (beyond 1)",
+                        {**c, "distribution": d, "geometry": g, "alpha": a, "k": 0.0, "f0": 1.0,
+                         "specular_reflectance": 1.0, "energy_compensation": True}))
+        furnace.append(preserves("compensated, ggx, smith, α = 0.5, f0 = 1, m_S = 0.5: reflects 0.5",
+                                 {**c, "distribution": "ggx", "geometry": "smith", "alpha": 0.5,
+                                  "k": 0.0, "f0": 1.0, "specular_reflectance": 0.5,
+                                  "energy_compensation": True}, value=0.5))
+        furnace.append(preserves("compensated, ggx, smith, α = 0.5, k = 0.5, m_D = m_S = 1",
+                                 {**c, "distribution": "ggx", "geometry": "smith", "alpha": 0.5,
+                                  "k": 0.5, "f0": 1.0, "diffuse_reflectance": 1.0,
+                                  "specular_reflectance": 1.0, "energy_compensation": True}))
+        extremes = [{**c, "alpha": a, "f0": f0, "k": k, "mode": mode, "distribution": d,
+                     "geometry": g}
+                    for a in (0.0, 1e-4, 1.0) for f0 in (0.0, 1.0) for k in (0.0, 0.5)
+                    for mode in ("hdr", "scanline") for d in mf.DISTRIBUTIONS for g in mf.GEOMETRIES]
+        extremes += [{**c, "alpha": a, "k": 0.0, "distribution": d, "geometry": g,
+                      "energy_compensation": True}
+                     for a in (0.0, 1.0, 1e3) for d in mf.DISTRIBUTIONS for g in mf.GEOMETRIES
+                     if a <= 1.0 or d != "blinn"]
+        anisotropic = [{**c, "distribution": d, "geometry": g, "alpha_u": au, "alpha_v": av}
+                       for d in ("beckmann", "ggx") for g in mf.GEOMETRIES
+                       for au, av in ((0.05, 0.4), (0.7, 0.02))]
+        consistency += [{**a, "k": 0.3} for a in anisotropic]
+        consistency += [{**c, "distribution": d, "alpha_u": 0.1, "alpha_v": 0.5, "k": 0.2,
+                         "sample_visible": False} for d in ("beckmann", "ggx")]
+        furnace += [Furnace(f"{a['distribution']}, {a['geometry']}, α {a['alpha_u']} × "
+                            f"{a['alpha_v']}, F0 = 1, k = 0",
+                            {**a, "k": 0.0, "f0": 1.0, "specular_reflectance": 1.0},
+                            phis=(0.0, 45.0, 90.0)) for a in anisotropic]
+        extremes += [{**c, "distribution": d, "geometry": g, "alpha_u": au, "alpha_v": av,
+                      "k": k, "mode": mode}
+                     for d in ("beckmann", "ggx") for g in mf.GEOMETRIES
+                     for au, av in ((0.0, 1.0), (1e-4, 1e-4), (1.0, 0.0)) for k in (0.0, 0.5)
+                     for mode in ("hdr", "scanline")]
+        return Cases(
+            chi2=chi2, consistency=consistency, furnace=furnace, extremes=extremes,
+            interior=[{**c, "distribution": d, "geometry": "smith", "alpha": 0.4, "k": 0.4,
+                       "f0": 0.3, "diffuse_reflectance": 0.5, "specular_reflectance": 0.7}
+                      for d in ("ggx", "blinn")]
+            + [{**c, "distribution": "beckmann", "alpha": 0.4, "k": 0.4, "f0": 0.3,
+                "diffuse_reflectance": 0.5, "specular_reflectance": 0.7,
+                "energy_compensation": True}]
+            + [{**c, "distribution": d, "geometry": "smith", "alpha_u": 0.2, "alpha_v": 0.5,
+                "k": 0.4, "f0": 0.3, "diffuse_reflectance": 0.5, "specular_reflectance": 0.7}
+               for d in ("beckmann", "ggx")],
+            negative=({**c, "distribution": "ggx", "k": 0.0, "alpha": 0.1},
+                      {**c, "distribution": "ggx", "k": 0.0, "alpha": 0.105}, 45),
+            lobe_width=0.35,
+            reciprocity=[{**c, "distribution": d, "geometry": g, "alpha": 0.3, "k": 0.2}
+                         for d in mf.DISTRIBUTIONS for g in mf.GEOMETRIES]
+            + [{**c, "distribution": d, "geometry": "smith", "alpha": 0.6, "k": 0.0,
+                "energy_compensation": True, "specular_reflectance": rgb([0.95, 0.64, 0.54])}
+               for d in mf.DISTRIBUTIONS]
+            + [{**a, "k": 0.2} for a in anisotropic],
+            lobe={**c, "distribution": "ggx", "alpha": 0.3, "k": 0.3, "f0": 0.5,
+                  "diffuse_reflectance": 0.8},
+            costs=[(f"cook_torrance {d} {g}", {**c, "distribution": d, "geometry": g, "alpha": 0.3})
+                   for d in mf.DISTRIBUTIONS for g in mf.GEOMETRIES]
+            + [(f"cook_torrance {d} smith anisotropic", {**c, "distribution": d,
+                                                         "geometry": "smith", "alpha_u": 0.1,
+                                                         "alpha_v": 0.3})
+               for d in ("beckmann", "ggx")],
+            report_furnace=[
+                ("GGX, Smith, alpha = 1, k = 0, F0 = 1",
+                 {**c, "distribution": "ggx", "geometry": "smith", "alpha": 1.0, "k": 0.0,
+                  "f0": 1.0, "specular_reflectance": 1.0}),
+                ("Blinn D, Smith (Blinn G1), alpha = 1, k = 0, F0 = 1",
+                 {**c, "distribution": "blinn", "geometry": "smith", "alpha": 1.0, "k": 0.0,
+                  "f0": 1.0, "specular_reflectance": 1.0}),
+                ("Beckmann, V-cavity, alpha = 0.3, k = 0.5, F0 = 1",
+                 {**c, "distribution": "beckmann", "alpha": 0.3, "k": 0.5, "f0": 1.0,
+                  "diffuse_reflectance": 1.0, "specular_reflectance": 1.0}),
+            ],
+            twins=[Twin(f"cook_torrance {d} vs roughconductor {d}", {**conductor, "distribution": d,
+                                                                     "alpha": 0.3},
+                        {"type": "roughconductor", "distribution": d, "alpha": 0.3},
+                        floor={"type": "bench_floor_ggx", "alpha": 0.3} if d == "ggx" else None,
+                        spread=(lambda t: {"alpha": 0.05 + 0.5 * t}) if d == "ggx" else None)
+                   for d in ("ggx", "beckmann")]
+            + [Twin("cook_torrance ggx anisotropic vs roughconductor ggx anisotropic",
+                    {**conductor, "distribution": "ggx", "alpha_u": 0.05, "alpha_v": 0.3},
+                    {"type": "roughconductor", "distribution": "ggx", "alpha_u": 0.05,
+                     "alpha_v": 0.3})],
+            related=[("cook_torrance ggx k=0.5 vs roughplastic ggx",
+                      {**c, "distribution": "ggx", "geometry": "smith", "k": 0.5, "alpha": 0.3},
+                      {"type": "roughplastic", "distribution": "ggx", "alpha": 0.3})],
+            energy=[("cook_torrance ggx smith", {**c, "distribution": "ggx", "geometry": "smith",
+                                                 "alpha": 0.5, "k": 0.3}),
+                    ("cook_torrance beckmann cook_torrance", {**c, "alpha": 0.5, "k": 0.3}),
+                    ("cook_torrance blinn smith", {**c, "distribution": "blinn", "geometry": "smith",
+                                                   "alpha": 0.5, "k": 0.3})],
+            sampling=[(f"cook_torrance ggx alpha {a}",
+                       {**c, "distribution": "ggx", "alpha": a, "k": 0.0, "f0": 0.9},
+                       [("visible normals", {}), ("full distribution", {"sample_visible": False}),
+                        ("cosine", {"sampling": "cosine"})])
+                      for a in (0.05, 0.3)],
+            lobes_off=[("cook_torrance k=1 vs lambert", {**c, "k": 1.0, "diffuse_reflectance": 0.6},
+                        {"type": "lambert", "reflectance": 0.6})],
+            pictures=Pictures("alpha", (0.05, 0.15, 0.4), {"distribution": "ggx",
+                                                          "geometry": "smith", "k": 0.3}),
+            mitsuba=("roughconductor", "roughplastic", "principled"),
+            checked="`roughconductor` (isotropic and anisotropic); `roughplastic` (× exact/Schlick "
+                    "Fresnel); the random walk on the microsurface",
+        )

@@ -22,12 +22,13 @@ differentiated, never updated) the plugin has no lobe at all. A viewer or light 
 """
 from __future__ import annotations
 
-from types import SimpleNamespace
-
 import drjit as dr
 import mitsuba as mi
 
-from .base import BRDF, Param, Scaled
+from .base import BRDF, Inputs
+from .cases import Cases, Chi2, Furnace, Pictures, Twin, rgb
+from .lobes import Scaled
+from .params import Param
 
 
 # ----------------------------------------------------------------------------
@@ -56,6 +57,7 @@ def albedo(m_d, mode: str):
 # ----------------------------------------------------------------------------
 
 class Lambert(BRDF):
+    __doc__ = __doc__                  # the module's documentation, for help()
     name = "lambert"
     PARAMS = (Param("reflectance", 0.5, doc="m_D, the diffuse colour; above 1 allowed "
                     "(scanline mode clamps the lobe to [0, 1])."),)
@@ -64,7 +66,30 @@ class Lambert(BRDF):
         return not self.off("reflectance")
 
     def eval_textures(self, si, active):
-        return SimpleNamespace(colour_d=self.m_reflectance.eval(si, active))
+        return Inputs(colour_d=self.m_reflectance.eval(si, active))
 
     def f_diffuse(self, inp, si, wo):
-        return f(inp.colour_d, mi.Frame3f.cos_theta(wo), self.mode)
+        return f(inp.colour_d, mi.Frame3f.cos_theta(wo), self.options.mode)
+
+    # --- what runs of it: the tests, the validation report, the bench, the pictures ---
+    @classmethod
+    def cases(cls) -> Cases:
+        return Cases(
+            chi2=[Chi2({"type": "lambert", "mode": m}, (0, 85), quick=m == "hdr")
+                  for m in ("hdr", "scanline")],
+            consistency=[{"type": "lambert"},
+                         {"type": "lambert", "mode": "scanline", "reflectance": rgb([1.7, 0.6, 0.2])}],
+            furnace=[Furnace("m_D = 1", {"type": "lambert", "reflectance": 1.0}, lo=1.0, hi=1.0,
+                             tol=0.01)],
+            extremes=[{"type": "lambert"}, {"type": "lambert", "reflectance": 0.0}],
+            interior=[{"type": "lambert", "reflectance": 0.4}],
+            lobe={"type": "lambert", "reflectance": 0.8},
+            costs=[("lambert", {"type": "lambert", "reflectance": 0.6})],
+            twins=[Twin("lambert vs diffuse", {"type": "lambert", "reflectance": 0.6},
+                        {"type": "diffuse", "reflectance": 0.6},
+                        floor={"type": "bench_floor_diffuse", "reflectance": 0.6},
+                        spread=lambda t: {"reflectance": rgb([0.2 + 0.6 * t, 0.5, 0.8 - 0.6 * t])})],
+            pictures=Pictures("reflectance", (0.2, 0.5, 0.8)),
+            mitsuba=("diffuse",),
+            checked="Mitsuba's `diffuse`, to float precision",
+        )

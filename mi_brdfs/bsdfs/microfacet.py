@@ -25,6 +25,18 @@ normal, and the roughness rho (called ``alpha`` in the plugins)::
                     limit; at rho = 1 it overestimates G1 (0.87 against 0.67 at
                     60°) and the albedo exceeded 1 (1.30 at 89°).
 
+**Anisotropic roughness** (Beckmann and GGX): ``alpha`` is then a pair
+(α_u, α_v), the roughness along the tangent s (local x) and the bitangent t
+(local y), as Mitsuba's ``roughconductor`` takes them. D is the distribution
+stretched by (α_u, α_v) (Walter et al. 2007, eqs. 28 and 33 with the slope
+divided per axis), Smith's G1 that of the roughness projected on the
+direction's azimuth, α(φ) = sqrt(α_u² cos²φ + α_v² sin²φ) (Heitz 2014,
+section 5.3), and the visible normals are sampled in the configuration
+stretched to α = 1 (Heitz 2018). One roughness (a Float) is the isotropic
+case, traced exactly as before: the functions branch on the Python type of
+``alpha`` when a call is traced, so an isotropic plugin never pays for
+anisotropy.
+
 Scale-safe: every function is exact, finite and NaN-free, values and
 gradients, for directions down to cos θ = 1e-30 and exactly 0 and for
 ``alpha >= ALPHA_MIN``. The half vector is normalised after scaling by 2^62
@@ -43,6 +55,18 @@ from . import powercos
 from .grid import Axis, Grid
 
 ALPHA_MIN = 1e-4      # smallest roughness used (alpha = 0 is clamped here, as Mitsuba does)
+# Largest roughness used: a larger alpha (up to the largest float32) is clamped
+# here. The single-scattering lobe is then at its limit, no reflection: its
+# albedo is below 3.3e-7 at every incidence up to 89.9° for every D x G
+# (tests/bsdfs/test_cook_torrance.py::test_roughness_far_end), while alpha² stays
+# far from float32's overflow.
+ALPHA_MAX = 1e6
+# The same for each axis of an anisotropic roughness: with the other axis near
+# 1, the derivatives of a sample's weight overflow float32 from about 1e6 on
+# (measured: finite up to 1e5, infinite at 1e6 against alpha_v = 0.3). At 1e4
+# on both axes the lobe reflects less than 4e-5 of the light up to 89°
+# (tests/bsdfs/test_cook_torrance.py::test_roughness_far_end).
+ALPHA_MAX_ANISOTROPIC = 1e4
 TINY = 1e-18          # keeps squared quantities away from 0 (TINY² is still a normal float32)
 COS_FLOOR = 1e-12     # the V-cavity 1/(4 cos θ_i) stops growing below this cosine
 BECKMANN_CUTOFF = 100.0   # tan²/rho² beyond which the Beckmann D is 0 (exp(-100) < float32 min)
@@ -65,6 +89,25 @@ def half_vector(wi, wo):
     x, y, z = (wi.x + wo.x) * H_SCALE, (wi.y + wo.y) * H_SCALE, (wi.z + wo.z) * H_SCALE
     n = dr.rsqrt(dr.fmax(dr.fma(x, x, dr.fma(y, y, z * z)), H_NORM2_MIN))
     return mi.Vector3f(x * n, y * n, z * n)
+
+
+def anisotropic(alpha) -> bool:
+    """True for a roughness pair (α_u, α_v), False for one roughness."""
+    return type(alpha) is tuple
+
+
+def pair(alpha):
+    """(α_u, α_v) of a pair, (α, α) of one roughness (the same Float twice: an
+    isotropic call traces the same operations as before)."""
+    return alpha if type(alpha) is tuple else (alpha, alpha)
+
+
+def projected_sin2(v, alpha):
+    """α(φ)² sin²θ of a local direction: (α_u v.x)² + (α_v v.y)², the squared
+    length of its stretched tangential part (α² (x² + y²) for one roughness)."""
+    if type(alpha) is tuple:
+        return dr.square(alpha[0] * v.x) + dr.square(alpha[1] * v.y)
+    return dr.square(alpha) * (dr.square(v.x) + dr.square(v.y))
 
 
 def sin_theta(v):
@@ -91,6 +134,8 @@ def d_blinn(m, alpha):
 
 
 def d_beckmann(m, alpha):
+    if type(alpha) is tuple:
+        return _d_beckmann_anisotropic(m, *alpha)
     cos2, sin2 = _cos2_sin2(m)
     a2 = dr.square(alpha)
     # Where exp(-tan²/rho²) < exp(-BECKMANN_CUTOFF) (0 in float32), D is 0; the
@@ -102,13 +147,34 @@ def d_beckmann(m, alpha):
     return dr.select(valid, d, 0.0)
 
 
+def _d_beckmann_anisotropic(m, ax, ay):
+    """exp(-(x²/α_u² + y²/α_v²)/z²) / (π α_u α_v z⁴), 0 where the exponent
+    passes BECKMANN_CUTOFF (with a benign stand-in there, as the isotropic one)."""
+    cos2 = dr.square(m.z)
+    slope2 = dr.square(m.x / ax) + dr.square(m.y / ay)          # tan²θ_m · (stretch)
+    valid = (m.z > 0) & (slope2 < BECKMANN_CUTOFF * cos2)
+    c2 = dr.select(valid, cos2, 1.0)
+    d = dr.exp(-dr.select(valid, slope2, 0.0) / c2) / (dr.pi * ax * ay * dr.square(c2))
+    return dr.select(valid, d, 0.0)
+
+
 def d_ggx(m, alpha):
+    if type(alpha) is tuple:
+        return _d_ggx_anisotropic(m, *alpha)
     cos2, sin2 = _cos2_sin2(m)
     a2 = dr.square(alpha)
     up = m.z > 0
     # clamp(n·h)² (rho² - 1) + 1, written as sin² + cos² rho² for float32 accuracy;
     # 0 only for the zero vector (the half vector of wo = -wi): a stand-in then
     d = a2 / (dr.pi * dr.square(dr.select(up, sin2 + cos2 * a2, 1.0)))
+    return dr.select(up, d, 0.0)
+
+
+def _d_ggx_anisotropic(m, ax, ay):
+    """1 / (π α_u α_v (x²/α_u² + y²/α_v² + z²)²) above the horizon."""
+    up = m.z > 0
+    t = dr.square(m.x / ax) + dr.square(m.y / ay) + dr.square(m.z)
+    d = 1.0 / (dr.pi * ax * ay * dr.square(dr.select(up, t, 1.0)))
     return dr.select(up, d, 0.0)
 
 
@@ -139,7 +205,10 @@ def g1_ggx_over_cos(v, alpha):
     """G1(v) / cos θ_v for GGX: the lecture's 2/(1 + sqrt(1 + rho² tan²θ)) times
     cos/cos = 2 / (c + sqrt(c² + rho² sin²θ)): no tan², finite at c = 0."""
     c = dr.fmax(v.z, 0.0)
-    denom = c + dr.sqrt(dr.fma(c, c, dr.square(alpha) * dr.fma(v.x, v.x, v.y * v.y)))
+    if type(alpha) is tuple:                       # the projected roughness α(φ)
+        denom = c + dr.sqrt(dr.fma(c, c, projected_sin2(v, alpha)))
+    else:
+        denom = c + dr.sqrt(dr.fma(c, c, dr.square(alpha) * dr.fma(v.x, v.x, v.y * v.y)))
     # >= alpha >= ALPHA_MIN above the surface; below TINY only straight down or
     # for the zero vector, where G1 = G1/c · c is 0 anyway
     return 2.0 / dr.fmax(denom, TINY)
@@ -178,7 +247,12 @@ def g1_beckmann_over_cos(v, alpha):
     exact erf form (float64), the fit's relative error is at most 5.1e-6 for
     every a; in float32, 5.5e-6 (tests/bsdfs/test_cook_torrance.py::
     test_beckmann_g1). Mitsuba's own fit (its ``roughconductor``) is within
-    3.5e-3."""
+    3.5e-3. Anisotropic: the same with the roughness projected on v's azimuth,
+    α(φ) = sqrt(α_u² cos²φ + α_v² sin²φ) (α_u along the normal, where G1 = 1)."""
+    if type(alpha) is tuple:
+        s = sin_theta(v)
+        alpha = dr.select(s > 0, dr.sqrt(projected_sin2(v, alpha)) / dr.select(s > 0, s, 1.0),
+                          alpha[0])
     c = dr.fmax(v.z, 0.0) * (1.0 / alpha)               # cos θ / rho
     s = sin_theta(v)
     return _homogeneous(BECKMANN_P, c, s) / dr.fmax(alpha * _homogeneous(BECKMANN_Q, c, s),
@@ -297,29 +371,43 @@ def _normalize(x, y, z):
 
 def sample_ggx_visible(wi, sample2, alpha):
     """A GGX visible normal for the viewer wi (spherical caps)."""
+    ax, ay = pair(alpha)
     # the viewer in the hemisphere configuration (roughness 1)
-    vx, vy, vz = _normalize(alpha * wi.x, alpha * wi.y, dr.fmax(wi.z, 0.0))
+    vx, vy, vz = _normalize(ax * wi.x, ay * wi.y, dr.fmax(wi.z, 0.0))
     z = dr.fma(1.0 - sample2.y, 1.0 + vz, -vz)            # uniform on the spherical cap
     sin_t = dr.safe_sqrt(1.0 - z * z)
     s, c = dr.sincos(dr.two_pi * sample2.x)
     # back to the ellipsoid configuration
-    return mi.Vector3f(*_normalize(alpha * dr.fma(c, sin_t, vx), alpha * dr.fma(s, sin_t, vy),
+    return mi.Vector3f(*_normalize(ax * dr.fma(c, sin_t, vx), ay * dr.fma(s, sin_t, vy),
                                    dr.fmax(z + vz, 0.0)))
 
 
 def sample_full(distribution: str, sample2, alpha):
     """m with density D(m) cos θ_m: tan²θ_m = rho² u/(1 - u) (GGX),
-    -rho² log(1 - u) (Beckmann); Blinn through powercos."""
+    -rho² log(1 - u) (Beckmann); Blinn through powercos. Anisotropic: the
+    azimuth of the stretched slope, tan φ = (α_v/α_u) tan(2π u_y), and the
+    roughness projected on it (Walter et al. 2007's sampling with the
+    slope distribution stretched per axis)."""
     if distribution == "blinn":
         return sample_blinn(sample2, alpha)
     u = dr.fmin(sample2.x, 1.0 - 2.0**-24)
-    if distribution == "ggx":
-        tan2 = dr.square(alpha) * u / (1.0 - u)
+    if type(alpha) is tuple:
+        ax, ay = alpha
+        s0, c0 = dr.sincos(dr.two_pi * sample2.y)          # the unstretched slope's azimuth
+        sx, sy = ax * c0, ay * s0                           # stretched: azimuth of m
+        r = dr.sqrt(dr.fma(sx, sx, sy * sy))
+        c, s = sx / r, sy / r
+        # α(φ)² = 1 / (cos²φ/α_u² + sin²φ/α_v²) along m's azimuth φ
+        a2 = 1.0 / (dr.square(c / ax) + dr.square(s / ay))
     else:
-        tan2 = -dr.square(alpha) * dr.log(1.0 - u)
+        a2 = dr.square(alpha)
+        s, c = dr.sincos(dr.two_pi * sample2.y)
+    if distribution == "ggx":
+        tan2 = a2 * u / (1.0 - u)
+    else:
+        tan2 = -a2 * dr.log(1.0 - u)
     cos_t = dr.rsqrt(1.0 + tan2)
     sin_t = dr.safe_sqrt(tan2) * cos_t
-    s, c = dr.sincos(dr.two_pi * sample2.y)
     return mi.Vector3f(c * sin_t, s * sin_t, cos_t)
 
 
@@ -327,7 +415,8 @@ def sample_visible(distribution: str, wi, sample2, alpha):
     """A visible normal of GGX or Beckmann for the viewer wi."""
     if distribution == "ggx":
         return sample_ggx_visible(wi, sample2, alpha)
-    m, _ = mi.MicrofacetDistribution(mi.MicrofacetType.Beckmann, alpha, True).sample(wi, sample2)
+    ax, ay = pair(alpha)
+    m, _ = mi.MicrofacetDistribution(mi.MicrofacetType.Beckmann, ax, ay, True).sample(wi, sample2)
     # Mitsuba's Beckmann sampler fails at a corner of its domain (NaN for
     # u = (0, 0) at normal incidence): the zero vector instead, whose
     # "reflection" -wi is below the horizon (a discarded sample), and no NaN

@@ -76,15 +76,17 @@ enters as the paper defines it, per bounce (ρ_ms = m_D² E_avg /
 from __future__ import annotations
 
 import math
-from types import SimpleNamespace
 
 import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from . import energy
-from .base import BRDF, Option, Param, Reader, Scaled
+from . import compensation
+from .base import BRDF, Inputs
+from .cases import HALF_PI, Cases, Chi2, Furnace, Pictures, preserves, rgb
 from .grid import Axis, Grid
+from .lobes import Scaled
+from .params import Option, Param, Reader
 
 METHODS = ("exact", "table")
 SIGMA_MAX = 0.5 * math.pi          # σ in [0, π/2]
@@ -201,9 +203,8 @@ def fon_albedo_average(r):
 # ----------------------------------------------------------------------------
 
 class OrenNayar(BRDF):
+    __doc__ = __doc__                  # the module's documentation, for help()
     name = "oren_nayar"
-    compensable = True
-    compensates = "diffuse"
     OPTIONS = (
         Option("method", "exact", METHODS,
                doc='``"exact"``: the lecture\'s formulas (acos, sin, tan) at every evaluation; '
@@ -222,49 +223,87 @@ class OrenNayar(BRDF):
     )
 
     def read(self, reader: Reader) -> None:
-        BRDF.read(self, reader)        # (no super(): plugin classes are rebuilt per variant)
+        super().read(reader)
         self.table = None                   # T(p, q) = sin α tan β
-        if "table_resolution" in reader.props and self.method != "table":
+        if "table_resolution" in reader.props and self.options.method != "table":
             raise reader.error("table_resolution", reader.props["table_resolution"],
                                'only with method="table"')
-        if self.method == "table":
-            if self.energy_compensation:
+        if self.options.method == "table":
+            if self.options.energy_compensation:
                 raise reader.error("method", "table", '"exact" with energy_compensation '
                                    "(EON has no table of the lecture's sin α tan β)")
-            self.table = table_grid(self.table_resolution)
+            self.table = table_grid(self.options.table_resolution)
 
     def has_diffuse(self) -> bool:
         return not self.off("reflectance")
 
     def eval_textures(self, si, active):
         sigma = self.m_sigma.eval_1(si, active)
-        return SimpleNamespace(colour_d=self.m_reflectance.eval(si, active), sigma=sigma,
-                               r=eon_roughness(sigma))
+        return Inputs(colour_d=self.m_reflectance.eval(si, active), sigma=sigma,
+                      r=eon_roughness(sigma))
 
     def f_diffuse(self, inp, si, wo):
-        if self.energy_compensation:               # EON: FON + the base's multiple scattering
+        if self.options.energy_compensation:       # EON: FON + the base's multiple scattering
             return fon(inp.colour_d, inp.r, si.wi, wo)
         cos_i, cos_o = mi.Frame3f.cos_theta(si.wi), mi.Frame3f.cos_theta(wo)
-        if self.method == "table":
+        if self.options.method == "table":
             sa_tb = self.table(cos_o, cos_i)
         else:
             sa_tb = sin_alpha_tan_beta(cos_i, cos_o)
         g = g_azimuth(si.wi, wo)
-        return oren_nayar(inp.colour_d, inp.sigma, g, sa_tb, cos_o, self.mode)
+        return oren_nayar(inp.colour_d, inp.sigma, g, sa_tb, cos_o, self.options.mode)
 
     # --- energy compensation (EON) ------------------------------------------------
-    def ms_albedo(self, inp, v):
-        return 1.0 - fon_albedo(mi.Frame3f.cos_theta(v), inp.r)
-
-    def ms_average(self, inp):
-        return 1.0 - fon_albedo_average(inp.r)
-
-    def ms_colour(self, inp):
+    def compensation(self) -> compensation.Compensation:
         # EON's rho_ms: rho enters as the paper defines it, not linearly
-        return energy.ms_series(inp.colour_d, fon_albedo_average(inp.r))
+        return compensation.Analytic(
+            albedo=lambda inp, v: 1.0 - fon_albedo(mi.Frame3f.cos_theta(v), inp.r),
+            average=lambda inp: 1.0 - fon_albedo_average(inp.r),
+            colour=lambda inp: compensation.ms_series(inp.colour_d, fon_albedo_average(inp.r)),
+            lobe="diffuse")
 
     def describe(self) -> dict:
-        fields = BRDF.describe(self)
-        if self.method != "table":
+        fields = super().describe()
+        if self.options.method != "table":
             del fields["table_resolution"]
         return fields
+
+    # --- what runs of it: the tests, the validation report, the bench, the pictures ---
+    @classmethod
+    def cases(cls) -> Cases:
+        on = {"type": "oren_nayar"}
+        eon = {**on, "energy_compensation": True}
+        return Cases(
+            chi2=[Chi2({**on, "sigma": s, "method": m}, res=101, quick=s == 0.5)
+                  for s, m in [(0.0, "exact"), (0.5, "table"), (HALF_PI, "exact")]]
+            + [Chi2({**on, "sigma": 1.0, "mode": "scanline", "reflectance": rgb([2.0, 0.5, 0.1])},
+                    (60,), res=101),
+               Chi2({**eon, "sigma": 0.8, "reflectance": rgb([0.9, 0.5, 0.2])}, (0, 60), res=101)],
+            consistency=[{**on, "sigma": 0.7}, {**on, "sigma": HALF_PI, "method": "table"},
+                         {**on, "sigma": 0.4, "mode": "scanline", "reflectance": rgb([1.8, 0.6, 0.2])},
+                         {**eon, "sigma": 1.2, "reflectance": rgb([0.9, 0.5, 0.2])}],
+            furnace=[Furnace("σ = 0", {**on, "reflectance": 1.0, "sigma": 0.0}, lo=1.0, tol=0.01),
+                     # the lecture's qualitative model: below 1 except near grazing at small σ
+                     Furnace("σ = 0.2 (exceeds 1 near grazing: the model's own)",
+                             {**on, "reflectance": 1.0, "sigma": 0.2}, hi=1.03),
+                     Furnace("σ = π/2", {**on, "reflectance": 1.0, "sigma": HALF_PI})]
+            + [preserves(f"EON, σ = {s:g}", {**eon, "reflectance": 1.0, "sigma": s})
+               for s in (0.0, 0.2, 0.8, HALF_PI)],
+            extremes=[{**on, "sigma": s, "method": m} for s in (0.0, HALF_PI)
+                      for m in ("exact", "table")]
+            + [{**eon, "sigma": s} for s in (0.0, HALF_PI)],
+            interior=[{**on, "sigma": 0.4, "reflectance": 0.6, "method": m}
+                      for m in ("exact", "table")]
+            + [{**eon, "sigma": 0.4, "reflectance": 0.6}],
+            reciprocity=[{**on, "sigma": s, "method": m, "reflectance": rgb([0.9, 0.5, 0.2])}
+                         for m in ("exact", "table") for s in (0.3, 1.2)]
+            + [{**eon, "sigma": s, "reflectance": rgb([0.9, 0.5, 0.2])} for s in (0.3, 1.2)],
+            lobe={**on, "reflectance": 0.8, "sigma": 0.8},
+            costs=[(f"oren_nayar {m}", {**on, "sigma": 0.5, "method": m}) for m in ("exact", "table")],
+            energy=[("oren_nayar (EON)", {**on, "sigma": 0.8})],
+            # the lecture's table against the exact formulas (the bench's oren_nayar group)
+            variants=[("oren_nayar table vs exact", {**on, "sigma": 0.5, "reflectance": 0.8})],
+            pictures=Pictures("sigma", (0.0, 0.5, 1.0, HALF_PI), {"reflectance": 0.8}),
+            mitsuba=("diffuse", "principled"),
+            checked="`diffuse` at σ = 0; EON's published listing",
+        )

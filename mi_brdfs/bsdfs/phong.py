@@ -37,7 +37,7 @@ albedo at normal incidence against the diffuse one: m_S vs m_D in hdr mode,
 is no diffuse lobe, with m_S = 0 no specular one.
 
 **Energy compensation** (``energy_compensation``): the reciprocal lobe of
-Kulla & Conty 2017 / Turquin 2019 (:mod:`mi_brdfs.bsdfs.energy`) returns
+Kulla & Conty 2017 / Turquin 2019 (:mod:`mi_brdfs.bsdfs.compensation`) returns
 what the lobe loses below the horizon (g = 1 - E), so that the specular lobe
 reflects m_S at every incident angle: m_S scales it linearly. E(μ, γ) is
 tabulated from the hdr lobe above over cos θ and log(1 + γ), γ in [0, 1e8],
@@ -57,9 +57,12 @@ from __future__ import annotations
 import drjit as dr
 import mitsuba as mi
 
-from . import energy, lambert, powercos
-from .base import BRDF, Param, Scaled, mean
+from . import compensation, lambert, powercos
+from .base import BRDF
+from .cases import Cases, Chi2, Furnace, Pictures, preserves, rgb
 from .grid import Axis
+from .lobes import Scaled, mean
+from .params import Param
 
 MAX_EXPONENT = 1e8     # lobe ~1e-4 rad wide, still 1000x the float32 direction spacing
 
@@ -119,10 +122,10 @@ ALBEDO_AXES = (Axis("mu", 0.0, 1.0, 33, "sqrt"),
 
 
 class Phong(BRDF):
+    __doc__ = __doc__                  # the module's documentation, for help()
     # Also the base of blinn.Blinn, which differs only by the formulas below
     # (its module's functions of the same names) and its exponent's meaning.
     name = "phong"
-    compensable = True
     PARAMS = (
         Param("diffuse_reflectance", 0.5, doc="m_D, the diffuse colour; above 1 allowed "
               "(scanline mode clamps)."),
@@ -143,49 +146,117 @@ class Phong(BRDF):
     pdf_lobe = staticmethod(pdf_lobe)
 
     @classmethod
-    def albedo_specs(cls) -> list[energy.AlbedoSpec]:
-        return [energy.AlbedoSpec(cls.name, ALBEDO_AXES, f=cls.specular_hdr,
-                                  sample=cls.sample_lobe, pdf=cls.pdf_lobe)]
+    def tables(cls) -> list[compensation.AlbedoSpec]:
+        return [compensation.AlbedoSpec(cls.name, ALBEDO_AXES, f=cls.specular_hdr,
+                                        sample=cls.sample_lobe, pdf=cls.pdf_lobe)]
 
     # --- lobes ---------------------------------------------------------------
     def has_diffuse(self) -> bool:
         return not self.off("diffuse_reflectance")
 
-    def has_specular(self) -> bool:
+    def has_glossy(self) -> bool:
         return not self.off("specular_reflectance")
 
     def eval_textures(self, si, active):
-        return self.with_colours(si, active, gamma=self.m_exponent.eval_1(si, active))
+        return self.colours(si, active, gamma=self.m_exponent.eval_1(si, active))
 
     def f_diffuse(self, inp, si, wo):
-        return lambert.f(inp.colour_d, mi.Frame3f.cos_theta(wo), self.mode)
+        return lambert.f(inp.colour_d, mi.Frame3f.cos_theta(wo), self.options.mode)
 
-    def f_specular(self, inp, si, wo):
-        spec = self.specular_scanline if self.mode == "scanline" else self.specular_hdr
+    def f_glossy(self, inp, si, wo):
+        spec = self.specular_scanline if self.options.mode == "scanline" else self.specular_hdr
         return Scaled(inp.colour_s, spec(si.wi, wo, inp.gamma))
 
     def selection_weights(self, inp, si):
-        w_d = mean(inp.colour_d) if self.diffuse else mi.Float(0.0)
-        w_s = (mean(inp.colour_s) * self.specular_weight(inp.gamma, self.mode)
-               if self.specular else mi.Float(0.0))
+        lobes = self.state.plan.lobes
+        w_d = mean(inp.colour_d) if lobes.diffuse else mi.Float(0.0)
+        w_s = (mean(inp.colour_s) * self.specular_weight(inp.gamma, self.options.mode)
+               if lobes.glossy else mi.Float(0.0))
         return w_d, w_s
 
-    # --- specular sampling ----------------------------------------------------
-    def sample_specular(self, inp, si, sample2):
+    # --- glossy sampling ----------------------------------------------------------
+    def sample_glossy(self, inp, si, sample2):
         return self.sample_lobe(si.wi, sample2, inp.gamma)
 
-    def pdf_specular(self, inp, si, wo):
+    def pdf_glossy(self, inp, si, wo):
         return self.pdf_lobe(si.wi, wo, inp.gamma)
 
-    # --- energy compensation ----------------------------------------------------
-    def albedo_spec(self) -> energy.AlbedoSpec:
-        return self.albedo_specs()[0]
+    # --- energy compensation: what the lobe loses below the horizon ---------------
+    def compensation(self) -> compensation.Compensation:
+        return compensation.Tabulated(compensation.complement(self.tables()[0]),
+                                      parameters=lambda inp: (inp.gamma,),
+                                      sources=("exponent",), colour=lambda inp: inp.colour_s)
 
-    def table_parameters(self, inp):
-        return (inp.gamma,)
-
-    def table_sources(self):
-        return ("exponent",)
-
-    def ms_colour(self, inp):
-        return inp.colour_s
+    # --- what runs of it: the tests, the validation report, the bench, the pictures ---
+    @classmethod
+    def cases(cls) -> Cases:
+        name = cls.name
+        b = {"type": name}
+        chi2 = [Chi2({**b, "exponent": g, "diffuse_reflectance": m_d}, (0, 30, 60, 85), ires=64,
+                     quick=(g, m_d) in ((100.0, 0.5), (1e3, 0.0)))
+                for g in (0.0, 1.0, 10.0, 100.0, 1e3) for m_d in (0.0, 0.5)]
+        chi2 += [Chi2({**b, "exponent": 1e4, "diffuse_reflectance": 0.0}, (30, 60, 85), ires=64),
+                 # scanline weights pick the lobes differently; coloured lobes
+                 Chi2({**b, "mode": "scanline", "exponent": 10.0,
+                       "diffuse_reflectance": rgb([1.5, 0.3, 0.0]),
+                       "specular_reflectance": rgb([0.9, 0.9, 2.0])}, (45,), ires=64),
+                 Chi2({**b, "mode": "scanline", "exponent": 200.0}, (70,), ires=64),
+                 # a textured exponent (looked up at uv = 0.5, 0.5)
+                 Chi2({**b, "exponent": {"type": "checkerboard", "color0": 5.0, "color1": 50.0}},
+                      (20,), ires=64),
+                 # the compensation lobe, sampled in proportion to its weight
+                 Chi2({**b, "exponent": 20.0, "diffuse_reflectance": 0.2,
+                       "energy_compensation": True}, (0, 60), ires=64)]
+        white = {**b, "diffuse_reflectance": 0.0, "specular_reflectance": 1.0}
+        return Cases(
+            chi2=chi2,
+            consistency=[{**b, "exponent": 0.0}, {**b, "exponent": 1.0},
+                         {**b, "exponent": 50.0, "diffuse_reflectance": 0.0}, {**b, "exponent": 1e4},
+                         {**b, "exponent": 1e6, "diffuse_reflectance": 0.0},
+                         {**b, "mode": "scanline", "exponent": 30.0,
+                          "diffuse_reflectance": rgb([1.5, 0.3, 0.0]),
+                          "specular_reflectance": rgb([0.9, 0.9, 2.0])},
+                         {**b, "specular_reflectance": 0.0},
+                         {**b, "exponent": 8.0, "energy_compensation": True,
+                          "specular_reflectance": rgb([0.9, 0.6, 0.3]), "diffuse_reflectance": 0.1}],
+            furnace=[Furnace("m_D = 0, m_S = 1, γ = 1", {**white, "exponent": 1.0}),
+                     Furnace("m_D = 0.5, m_S = 0.5, γ = 50",
+                             {**b, "diffuse_reflectance": 0.5, "specular_reflectance": 0.5,
+                              "exponent": 50.0})]
+            + [preserves(f"compensated, γ = {g:g}", {**white, "exponent": g,
+                                                      "energy_compensation": True},
+                         points=2048 if g >= 1e3 else 1024)
+               for g in (1.0, 10.0, 100.0, 1e4)]
+            + [preserves(f"compensated, m_S = 0.5, γ = {g:g}: reflects 0.5",
+                         {**white, "specular_reflectance": 0.5, "exponent": g,
+                          "energy_compensation": True}, value=0.5) for g in (10.0, 100.0)],
+            extremes=[{**b, "exponent": g, "mode": mode, "diffuse_reflectance": m_d,
+                       "specular_reflectance": m_s}
+                      for g in (0.0, 1.0, 1e4, 1e6, 1e8) for mode in ("hdr", "scanline")
+                      for m_d, m_s in ((0.5, 0.5), (0.0, 1.0), (1.0, 0.0))]
+            + [{**b, "exponent": g, "energy_compensation": True} for g in (0.0, 1e8)],
+            interior=[{**b, "diffuse_reflectance": 0.4, "specular_reflectance": 0.6,
+                       "exponent": 20.0},
+                      {**b, "diffuse_reflectance": 0.4, "specular_reflectance": 0.6,
+                       "exponent": 20.0, "energy_compensation": True}],
+            negative=({**b, "diffuse_reflectance": 0.0, "exponent": 100.0},
+                      {**b, "diffuse_reflectance": 0.0, "exponent": 110.0}, 30),
+            lobe_width=0.25,
+            reciprocity=[{**b, "diffuse_reflectance": rgb([1.4, 0.5, 0.2]), "exponent": g,
+                          "specular_reflectance": rgb([0.9, 2.0, 0.3])}
+                         for g in (0.0, 1.0, 30.0, 1e3)],
+            lobe={**b, "diffuse_reflectance": 0.3, "specular_reflectance": 0.6, "exponent": 30},
+            costs=[(name, {**b, "exponent": 50})],
+            energy=[(name, {**b, "exponent": 10.0})],
+            sampling=[(f"{name} gamma {g}", {**b, "exponent": g, "diffuse_reflectance": 0.0,
+                                             "specular_reflectance": 0.9},
+                       [("lobe", {}), ("cosine", {"sampling": "cosine"})])
+                      for g in (10, 100, 1000)] if name == "phong" else [],
+            lobes_off=[(f"{name} m_S=0 vs lambert",
+                        {**b, "specular_reflectance": 0.0, "diffuse_reflectance": 0.6},
+                        {"type": "lambert", "reflectance": 0.6})] if name == "phong" else [],
+            pictures=Pictures("exponent", (10.0, 100.0, 1000.0), {"diffuse_reflectance": 0.3,
+                                                                  "specular_reflectance": 0.6}),
+            mitsuba=("plastic", "roughplastic"),
+            checked="white furnace",
+        )

@@ -24,7 +24,7 @@ hemisphere reflects c·Ω·N, N the normalisation. The largest Ω is the whole
 hemisphere, 2π, so N = 1/(2π) makes each lobe's albedo at most its brightest
 colour (per channel, the larger of m_D1 and m_D2 for the diffuse bands, of
 m_S1 and m_S2 for the highlight), and a white diffuse-only toon (m_D1 = m_D2 = 1, m_S = 0)
-reflects exactly 1 at every angle (the white furnace in the catalog). The flat
+reflects exactly 1 at every angle (the white furnace of its cases). The flat
 bands stay flat: N is a constant, not a cosine. The scanline mode is the
 lecture's formula, unchanged. The cartoon's dark side is m_D2, also for lights below
 the surface (``lit_from_behind()``); the specular is 0 for them, and a viewer
@@ -76,13 +76,15 @@ glossy flags), so integrators sample the lights for them.
 from __future__ import annotations
 
 import math
-from types import SimpleNamespace
 
 import drjit as dr
 import mitsuba as mi
 
 from . import microfacet as mf
-from .base import BRDF, Option, Param, Reader, mean
+from .base import BRDF, Inputs
+from .cases import Cases, Chi2, Furnace, Pictures, ramp, rgb
+from .lobes import mean
+from .params import Option, Param, Reader
 
 SPECULAR_MODELS = ("phong", "blinn")
 CONE_MIN = 1e-4            # smallest 1 - cos(half-angle) of the sampling cone
@@ -161,7 +163,32 @@ SPECULAR_STEP = ("specular_reflectance", "specular_shade", "specular_threshold")
 HDR_SCALE = 1.0 / (2.0 * math.pi)     # hdr: a constant colour c reflects c over the hemisphere
 
 
+
+# What runs of the model (its cases(), at the end of the class) uses these.
+TOON_RAMP = [[0.1, 0.1, 0.1], [0.4, 0.3, 0.2], [1.0, 0.9, 0.8]]
+TOON_SPEC_RAMP = [[0.2, 0.2, 0.2]] * 3 + [[1.5, 1.5, 1.5]]
+
+
+def _toon_chi2_configs() -> list[dict]:
+    configs = []
+    for m in ("phong", "blinn"):
+        t = {"type": "toon", "specular_model": m}
+        configs += [
+            t,
+            {**t, "smoothness": 0.2, "specular_shade": 0.3, "specular_threshold": 0.7},
+            {**t, "specular_threshold": 0.97, "diffuse_reflectance": 0.0, "diffuse_shade": 0.0},
+            {**t, "specular_threshold": 0.2, "smoothness": 1.0, "diffuse_reflectance": 0.0,
+             "diffuse_shade": 0.0},
+        ]
+    configs.append({"type": "toon", "diffuse_ramp": ramp(TOON_RAMP),
+                    "specular_ramp": ramp(TOON_SPEC_RAMP), "specular_model": "blinn"})
+    configs.append({"type": "toon", "mode": "scanline", "diffuse_reflectance": rgb([1.5, 0.5, 0.2]),
+                    "specular_reflectance": 3.0, "specular_threshold": 0.8})
+    return configs
+
+
 class Toon(BRDF):
+    __doc__ = __doc__                  # the module's documentation, for help()
     name = "toon"
     reciprocal = False
     OPTIONS = (Option("specular_model", "phong", SPECULAR_MODELS,
@@ -217,7 +244,7 @@ class Toon(BRDF):
             return not self.off("diffuse_ramp")
         return not (self.off("diffuse_reflectance") and self.off("diffuse_shade"))
 
-    def has_specular(self) -> bool:
+    def has_glossy(self) -> bool:
         if self.m_specular_ramp is not None:
             return not self.off("specular_ramp")
         return not (self.off("specular_reflectance") and self.off("specular_shade"))
@@ -230,21 +257,21 @@ class Toon(BRDF):
     def lit_from_behind(self) -> bool:
         # The scan-line dark side (m_D2) faces lights below the surface; in a
         # path tracer the surface is opaque and light from below never reaches it.
-        return self.mode == "scanline"
+        return self.options.mode == "scanline"
 
     def eval_textures(self, si, active):
-        inp = SimpleNamespace()
-        if self.diffuse and self.m_diffuse_ramp is None:
+        inp, lobes = Inputs(), self.state.plan.lobes
+        if lobes.diffuse and self.m_diffuse_ramp is None:
             inp.colour_d1 = self.m_diffuse_reflectance.eval(si, active)
             inp.colour_d2 = self.m_diffuse_shade.eval(si, active)
             inp.t_d = self.m_diffuse_threshold.eval_1(si, active)
-        if self.specular and self.m_specular_ramp is None:
+        if lobes.glossy and self.m_specular_ramp is None:
             inp.colour_s1 = self.m_specular_reflectance.eval(si, active)
             inp.colour_s2 = self.m_specular_shade.eval(si, active)
             inp.t_s = self.m_specular_threshold.eval_1(si, active)
-            inp.k = cone_opening(inp.t_s - 0.5 * self.m_smoothness, self.specular_model)
+            inp.k = cone_opening(inp.t_s - 0.5 * self.m_smoothness, self.options.specular_model)
             # solid angle of the highlight: the cone (phong), ~4x the half-vector cone (blinn)
-            scale = 1.0 if self.specular_model == "phong" else 4.0
+            scale = 1.0 if self.options.specular_model == "phong" else 4.0
             inp.omega = dr.fmin(2.0 * dr.pi * inp.k * scale, 2.0 * dr.pi)
         return inp
 
@@ -254,7 +281,7 @@ class Toon(BRDF):
         return tex.eval(lookup)
 
     def scale(self):
-        return 1.0 if self.mode == "scanline" else HDR_SCALE
+        return 1.0 if self.options.mode == "scanline" else HDR_SCALE
 
     def f_diffuse(self, inp, si, wo):
         cos_o = mi.Frame3f.cos_theta(wo)
@@ -264,8 +291,8 @@ class Toon(BRDF):
             colour = two_tone(cos_o, inp.t_d, self.m_smoothness, inp.colour_d1, inp.colour_d2)
         return colour * self.scale()
 
-    def f_specular(self, inp, si, wo):
-        c = specular_cosine(si.wi, wo, self.specular_model)
+    def f_glossy(self, inp, si, wo):
+        c = specular_cosine(si.wi, wo, self.options.specular_model)
         if self.m_specular_ramp is not None:
             colour = self.ramp(self.m_specular_ramp, si, c)
         else:
@@ -293,21 +320,22 @@ class Toon(BRDF):
 
     def selection_weights(self, inp, si):
         w_d = w_s = mi.Float(0.0)
-        if self.diffuse:
+        lobes = self.state.plan.lobes
+        if lobes.diffuse:
             if self.m_diffuse_ramp is not None:
                 w_d = self.ramp_weight(self.m_diffuse_ramp, si)
             else:
                 t = clamp(inp.t_d, 0.0, 1.0)
                 w_d = 2.0 * dr.pi * (mean(inp.colour_d1) * (1.0 - t) + mean(inp.colour_d2) * t)
-        if self.specular:
+        if lobes.glossy:
             if self.m_specular_ramp is not None:
                 w_s = self.ramp_weight(self.m_specular_ramp, si)
             else:
                 w_s = mean(inp.colour_s1) * inp.omega + mean(inp.colour_s2) * 2.0 * dr.pi
         return w_d, w_s
 
-    # --- specular sampling: highlight cone + uniform hemisphere ----------------
-    def sample_specular(self, inp, si, sample2):
+    # --- glossy sampling: highlight cone + uniform hemisphere ---------------------
+    def sample_glossy(self, inp, si, sample2):
         q = self.cone_probability(inp)
         in_cone = sample2.x < q
         # reuse sample2.x for the chosen part
@@ -317,22 +345,65 @@ class Toon(BRDF):
         wo_rest = mi.warp.square_to_uniform_hemisphere(u)
         if self.m_specular_ramp is not None:
             return wo_rest
-        if self.specular_model == "blinn":
+        if self.options.specular_model == "blinn":
             h = square_to_cone(u, inp.k)                                  # half vector
             wo_cone = mi.reflect(si.wi, h)
         else:
             wo_cone = mi.Frame3f(mi.reflect(si.wi)).to_world(square_to_cone(u, inp.k))
         return dr.select(in_cone, wo_cone, wo_rest)
 
-    def pdf_specular(self, inp, si, wo):
+    def pdf_glossy(self, inp, si, wo):
         pdf_rest = dr.select(mi.Frame3f.cos_theta(wo) > 0, dr.inv_two_pi, 0.0)
         if self.m_specular_ramp is not None:
             return pdf_rest
         q = self.cone_probability(inp)
-        c = specular_cosine(si.wi, wo, self.specular_model)
+        c = specular_cosine(si.wi, wo, self.options.specular_model)
         pdf_cone = cone_pdf(c, inp.k)
-        if self.specular_model == "blinn":
+        if self.options.specular_model == "blinn":
             h = mf.half_vector(si.wi, wo)
             o_dot_h = dr.dot(wo, h)
             pdf_cone = dr.select(o_dot_h > 0, pdf_cone / (4.0 * dr.fmax(o_dot_h, mf.TINY)), 0.0)
         return q * pdf_cone + (1.0 - q) * pdf_rest
+
+    # --- what runs of it: the tests, the validation report, the bench, the pictures ---
+    @classmethod
+    def cases(cls) -> Cases:
+        t = {"type": "toon"}
+        chi2_configs = _toon_chi2_configs()
+        return Cases(
+            chi2=[Chi2(c, (0, 30, 60, 85), ires=32,
+                       quick=c == {**t, "specular_model": "phong"} or "diffuse_ramp" in c)
+                  for c in chi2_configs],
+            consistency=chi2_configs + [{**t, "specular_threshold": 1.0},
+                                        {**t, "smoothness": 2.0, "specular_shade": 0.1}],
+            furnace=[
+                # hdr: each lobe reflects at most its brightest colour (here 0.8 + 1)
+                Furnace("defaults", dict(t), hi=1.8),
+                Furnace("defaults, blinn", {**t, "specular_model": "blinn"}, hi=1.8),
+                Furnace("white diffuse only: exactly 1", {**t, "diffuse_reflectance": 1.0,
+                                                          "diffuse_shade": 1.0,
+                                                          "specular_reflectance": 0.0},
+                        lo=1.0, hi=1.0, tol=0.01),
+            ],
+            extremes=[dict(t, specular_model=m, mode=mode, smoothness=w, diffuse_threshold=td,
+                           specular_threshold=ts, specular_shade=ss)
+                      for m in ("phong", "blinn") for mode in ("hdr", "scanline") for w in (0.0, 2.0)
+                      for td, ts in ((0.5, 0.9), (-1.0, 1.0), (1.0, -1.0), (0.0, 0.0))
+                      for ss in (0.0, 0.4)],
+            interior=[dict(t, specular_model=m, diffuse_reflectance=0.7, diffuse_shade=0.25,
+                           diffuse_threshold=0.4, specular_reflectance=0.9, specular_shade=0.1,
+                           specular_threshold=0.6, smoothness=0.3) for m in ("phong", "blinn")],
+            negative=({**t, "diffuse_reflectance": 0.0, "diffuse_shade": 0.0,
+                       "specular_threshold": 0.95},
+                      {**t, "diffuse_reflectance": 0.0, "diffuse_shade": 0.0,
+                       "specular_threshold": 0.94}, 30),
+            lobe_width=0.6,
+            lobe={**t, "smoothness": 0.1},
+            costs=[("toon", dict(t)),
+                   ("toon with ramps", {**t, "diffuse_ramp": ramp([[0.1] * 3, [0.1] * 3,
+                                                                        [0.4] * 3, [0.8] * 3]),
+                                        "specular_ramp": ramp([[0.0] * 3] * 7 + [[1.0] * 3])})],
+            pictures=Pictures("specular_threshold", (0.5, 0.8, 0.95)),
+            mitsuba=("diffuse",),
+            checked="the lecture's step functions",
+        )

@@ -56,7 +56,7 @@ and wo = reflect(w_r, h) has p(wo) = p_h(h) / (4 wo·h). The lobe is picked in
 proportion to mean(m_D) (pi·mean(m_D) in scanline mode) vs mean(m_S).
 
 **Energy compensation** (``energy_compensation``): the reciprocal lobe of
-Kulla & Conty 2017 / Turquin 2019 (:mod:`mi_brdfs.bsdfs.energy`) returns
+Kulla & Conty 2017 / Turquin 2019 (:mod:`mi_brdfs.bsdfs.compensation`) returns
 what the lobe loses below the horizon (g = 1 - E), so that the specular lobe
 reflects m_S at every incident angle (m_S scales it linearly). E is
 tabulated from the hdr lobe over (cos θ, α) when isotropic and (cos θ,
@@ -78,9 +78,12 @@ from __future__ import annotations
 import drjit as dr
 import mitsuba as mi
 
-from . import energy, lambert, microfacet as mf
-from .base import BRDF, Option, Param, Reader, Scaled, mean
+from . import compensation, lambert, microfacet as mf
+from .base import BRDF
+from .cases import THETAS_LOW, Cases, Chi2, Furnace, Pictures, preserves, rgb
 from .grid import Axis
+from .lobes import Scaled, mean
+from .params import Option, Param, Reader
 
 ALPHA_MIN = 1e-4      # smallest roughness used (0 is clamped here)
 TINY = 1e-18          # keeps cosines away from 0 (TINY² is still a normal float32)
@@ -205,19 +208,24 @@ def _clamped(f):
     return lambda wi, x, *alphas: f(wi, x, *(dr.fmax(a, ALPHA_MIN) for a in alphas))
 
 
-ISOTROPIC = energy.AlbedoSpec(
+ISOTROPIC = compensation.AlbedoSpec(
     "ward/isotropic", ISOTROPIC_AXES,
     f=_clamped(lambda wi, wo, a: specular_vectors(wi, wo, a, a)),
     sample=_clamped(lambda wi, u, a: sample_lobe(wi, u, a, a)),
     pdf=_clamped(lambda wi, wo, a: pdf_specular(wi, wo, a, a)))
-ANISOTROPIC = energy.AlbedoSpec(                  # 140,625 nodes: 128² samples (~1 min)
+ANISOTROPIC = compensation.AlbedoSpec(                  # 140,625 nodes: 128² samples (~1 min)
     "ward/anisotropic", ANISOTROPIC_AXES, f=_clamped(specular_vectors),
     sample=_clamped(sample_lobe), pdf=_clamped(pdf_specular), samples=128)
 
 
+
+# What runs of the model (its cases(), at the end of the class) uses these.
+WARD_ALPHAS = [(1e-3, 0.5), (0.5, 1e-3), (0.0, 0.0), (1e-4, 1e-4), (1.0, 1.0), (0.2, 0.2)]
+
+
 class Ward(BRDF):
+    __doc__ = __doc__                  # the module's documentation, for help()
     name = "ward"
-    compensable = True
     OPTIONS = (Option("formula", "vectors", FORMULAS,
                       doc='``"vectors"``: the lecture\'s efficient dot-product form; '
                           '``"angles"``: its angle form (tan δ, cos φ, sin φ). Equal to '
@@ -249,14 +257,14 @@ class Ward(BRDF):
                 self.read_param(reader, p)
 
     @classmethod
-    def albedo_specs(cls) -> list[energy.AlbedoSpec]:
+    def tables(cls) -> list[compensation.AlbedoSpec]:
         return [ISOTROPIC, ANISOTROPIC]
 
     # --- lobes ---------------------------------------------------------------
     def has_diffuse(self) -> bool:
         return not self.off("diffuse_reflectance")
 
-    def has_specular(self) -> bool:
+    def has_glossy(self) -> bool:
         return not self.off("specular_reflectance")
 
     def eval_textures(self, si, active):
@@ -265,35 +273,112 @@ class Ward(BRDF):
             alpha_b = dr.fmax(self.m_alpha_v.eval_1(si, active), ALPHA_MIN)
         else:
             alpha_t = alpha_b = dr.fmax(self.m_alpha.eval_1(si, active), ALPHA_MIN)
-        return self.with_colours(si, active, alpha_t=alpha_t, alpha_b=alpha_b)
+        return self.colours(si, active, alpha_t=alpha_t, alpha_b=alpha_b)
 
     def f_diffuse(self, inp, si, wo):
-        return lambert.f(inp.colour_d, mi.Frame3f.cos_theta(wo), self.mode)
+        return lambert.f(inp.colour_d, mi.Frame3f.cos_theta(wo), self.options.mode)
 
-    def f_specular(self, inp, si, wo):
-        return Scaled(inp.colour_s, SPECULAR[self.formula](si.wi, wo, inp.alpha_t, inp.alpha_b))
+    def f_glossy(self, inp, si, wo):
+        specular = SPECULAR[self.options.formula]
+        return Scaled(inp.colour_s, specular(si.wi, wo, inp.alpha_t, inp.alpha_b))
 
     def selection_weights(self, inp, si):
-        w_d = lambert.albedo(mean(inp.colour_d), self.mode) if self.diffuse else mi.Float(0.0)
-        w_s = mean(inp.colour_s) if self.specular else mi.Float(0.0)
+        lobes = self.state.plan.lobes
+        w_d = lambert.albedo(mean(inp.colour_d), self.options.mode) if lobes.diffuse \
+            else mi.Float(0.0)
+        w_s = mean(inp.colour_s) if lobes.glossy else mi.Float(0.0)
         return w_d, w_s
 
-    # --- specular sampling ----------------------------------------------------
-    def sample_specular(self, inp, si, sample2):
+    # --- glossy sampling ----------------------------------------------------------
+    def sample_glossy(self, inp, si, sample2):
         return sample_lobe(si.wi, sample2, inp.alpha_t, inp.alpha_b)
 
-    def pdf_specular(self, inp, si, wo):
+    def pdf_glossy(self, inp, si, wo):
         return pdf_specular(si.wi, wo, inp.alpha_t, inp.alpha_b)
 
-    # --- energy compensation ----------------------------------------------------
-    def albedo_spec(self) -> energy.AlbedoSpec:
-        return ANISOTROPIC if self.anisotropic else ISOTROPIC
+    # --- energy compensation: what the lobe loses below the horizon ---------------
+    def compensation(self) -> compensation.Compensation:
+        if self.anisotropic:
+            return compensation.Tabulated(compensation.complement(ANISOTROPIC),
+                                          parameters=lambda inp: (inp.alpha_t, inp.alpha_b),
+                                          sources=("alpha_u", "alpha_v"),
+                                          colour=lambda inp: inp.colour_s)
+        return compensation.Tabulated(compensation.complement(ISOTROPIC),
+                                      parameters=lambda inp: (inp.alpha_t,), sources=("alpha",),
+                                      colour=lambda inp: inp.colour_s)
 
-    def table_parameters(self, inp):
-        return (inp.alpha_t, inp.alpha_b) if self.anisotropic else (inp.alpha_t,)
-
-    def table_sources(self):
-        return ("alpha_u", "alpha_v") if self.anisotropic else ("alpha",)
-
-    def ms_colour(self, inp):
-        return inp.colour_s
+    # --- what runs of it: the tests, the validation report, the bench, the pictures ---
+    @classmethod
+    def cases(cls) -> Cases:
+        w = {"type": "ward"}
+        # viewers at azimuth 30°, not along t or b: the anisotropic lobe is asymmetric
+        chi2 = [Chi2({**w, "alpha_u": at, "alpha_v": ab, "diffuse_reflectance": m_d},
+                     (0, 30, 60, 85), phi=30.0,
+                     quick=(at, ab, m_d) in ((0.05, 0.3, 0.5), (0.05, 0.05, 0.0)))
+                for at, ab in ((0.1, 0.1), (0.05, 0.3), (0.3, 0.05), (0.5, 0.5), (0.05, 0.05))
+                for m_d in (0.0, 0.5)]
+        chi2 += [Chi2({**w, "alpha_u": 0.15, "alpha_v": 0.04, "mode": "scanline",
+                       "formula": "angles", "diffuse_reflectance": rgb([0.9, 0.2, 0.1]),
+                       "specular_reflectance": rgb([1.5, 0.5, 0.5])}, (45,), phi=30.0),
+                 Chi2({**w, "alpha": 0.2, "formula": "angles"}, (75,), phi=30.0),
+                 Chi2({**w, "alpha_u": 0.1, "alpha_v": 0.3, "energy_compensation": True,
+                       "diffuse_reflectance": 0.2}, (0, 60), phi=30.0)]
+        white = {**w, "diffuse_reflectance": 0.0, "specular_reflectance": 1.0}
+        return Cases(
+            chi2=chi2,
+            consistency=[dict(w), {**w, "alpha_u": 0.05, "alpha_v": 0.4, "diffuse_reflectance": 0.0},
+                         {**w, "alpha_u": 1e-3, "alpha_v": 0.5, "formula": "angles"},
+                         {**w, "alpha": 0.7, "diffuse_reflectance": 0.3, "specular_reflectance": 0.7},
+                         {**w, "mode": "scanline", "alpha_u": 0.2, "alpha_v": 0.05,
+                          "diffuse_reflectance": rgb([1.5, 0.3, 0.0]),
+                          "specular_reflectance": rgb([0.9, 0.9, 2.0])},
+                         {**w, "alpha_u": 0.05, "alpha_v": 0.3, "energy_compensation": True}],
+            furnace=[Furnace("m_S = 1, α 0.2 × 0.2", {**white, "alpha": 0.2},
+                             thetas=THETAS_LOW + (80, 85, 88)),
+                     Furnace("m_S = 1, α 0.05 × 0.3", {**white, "alpha_u": 0.05, "alpha_v": 0.3},
+                             thetas=THETAS_LOW + (80, 85, 88), phis=(0.0, 90.0))]
+            + [preserves(f"compensated, α {label}", {**white, **alpha, "energy_compensation": True},
+                         phis=(0.0, 90.0) if "alpha_u" in alpha else (0.0,))
+               for label, alpha in (("0.05", {"alpha": 0.05}), ("0.3", {"alpha": 0.3}),
+                                    ("0.05 × 0.3", {"alpha_u": 0.05, "alpha_v": 0.3}),
+                                    ("2 (beyond 1)", {"alpha": 2.0}),
+                                    ("0.3 × 3 (beyond 1)", {"alpha_u": 0.3, "alpha_v": 3.0}))]
+            + [preserves("compensated, m_S = 0.5, α 0.3: reflects 0.5",
+                         {**white, "specular_reflectance": 0.5, "alpha": 0.3,
+                          "energy_compensation": True}, value=0.5)],
+            extremes=[{**w, "alpha_u": at, "alpha_v": ab, "mode": mode, "formula": formula,
+                       "diffuse_reflectance": m_d, "specular_reflectance": 1.0}
+                      for at, ab in WARD_ALPHAS for mode in ("hdr", "scanline")
+                      for formula in ("vectors", "angles") for m_d in (0.0, 0.5)]
+            + [{**w, "alpha_u": at, "alpha_v": ab, "energy_compensation": True}
+               for at, ab in WARD_ALPHAS],
+            interior=[{**w, "alpha_u": 0.15, "alpha_v": 0.3, "diffuse_reflectance": 0.5,
+                       "specular_reflectance": 0.7, "formula": f} for f in ("vectors", "angles")]
+            + [{**w, "alpha": 0.2, "diffuse_reflectance": 0.5, "specular_reflectance": 0.7},
+               {**w, "alpha_u": 0.15, "alpha_v": 0.3, "diffuse_reflectance": 0.5,
+                "specular_reflectance": 0.7, "energy_compensation": True}],
+            negative=({**w, "alpha_u": 0.05, "alpha_v": 0.3, "diffuse_reflectance": 0.0},
+                      {**w, "alpha_u": 0.05, "alpha_v": 0.315, "diffuse_reflectance": 0.0}, 45),
+            negative_phi=30.0,
+            lobe_width=0.3,
+            reciprocity=[{**w, "alpha_u": 0.05, "alpha_v": 0.3, "formula": f,
+                          "diffuse_reflectance": rgb([0.5, 0.2, 0.1])} for f in ("vectors", "angles")]
+            + [{**w, "alpha": 0.3, "energy_compensation": True}],
+            lobe={**w, "diffuse_reflectance": 0.3, "specular_reflectance": 0.6, "alpha_u": 0.1,
+                  "alpha_v": 0.3},
+            costs=[(f"ward {f}", {**w, "alpha_u": 0.1, "alpha_v": 0.3, "formula": f})
+                   for f in ("vectors", "angles")],
+            energy=[("ward", {**w, "alpha": 0.3}), ("ward anisotropic",
+                                                    {**w, "alpha_u": 0.05, "alpha_v": 0.3})],
+            sampling=[("ward anisotropic 0.05 x 0.3",
+                       {**w, "alpha_u": 0.05, "alpha_v": 0.3, "diffuse_reflectance": 0.0,
+                        "specular_reflectance": 0.9},
+                       [("lobe", {}), ("cosine", {"sampling": "cosine"})])],
+            lobes_off=[("ward m_D=0 vs ward m_D=0.5",
+                        {**w, "diffuse_reflectance": 0.0, "alpha_u": 0.1, "alpha_v": 0.3},
+                        {**w, "diffuse_reflectance": 0.5, "alpha_u": 0.1, "alpha_v": 0.3})],
+            pictures=Pictures("alpha_v", (0.05, 0.15, 0.4), {"alpha_u": 0.05,
+                                                             "diffuse_reflectance": 0.3}),
+            mitsuba=("roughconductor", "roughplastic"),
+            checked="reciprocity; its two forms agree",
+        )

@@ -13,6 +13,8 @@ from typing import Callable, Iterator, Mapping
 import numpy as np
 import OpenEXR
 
+from .. import _interrupt as interrupt
+
 
 def umask() -> int:
     """The process's umask (read by setting it and setting it back)."""
@@ -40,9 +42,10 @@ def atomic_path(path: str) -> Iterator[str]:
     fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=suffix, dir=directory)
     os.close(fd)
     try:
-        yield tmp
-        os.chmod(tmp, file_mode())          # mkstemp made it 0600
-        os.replace(tmp, path)
+        with interrupt.temporary(tmp):      # removed too if Ctrl-C ends the process
+            yield tmp
+            os.chmod(tmp, file_mode())      # mkstemp made it 0600
+            os.replace(tmp, path)
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)

@@ -62,10 +62,12 @@ With clamp off and hdr-mode BSDFs it computes what ``volpath`` with
 surface as a bounce and stops shadow rays at every surface). See
 ``docs/guide/scanline.md``.
 
-``hdr`` is registered too: Mitsuba's ``path`` integrator under the name the
-scenes' ``mode`` default uses, so ``<integrator type="$mode"/>`` switches
-between scan-line and path tracing with ``-D mode=...`` (its properties are
-passed to ``path``).
+``course`` is registered too: the course's two ways of rendering behind one
+name, chosen by its ``mode`` (``"scanline"``: this integrator; ``"hdr"``, the
+default: Mitsuba's ``path``; its other properties are passed on), so that a
+scene's ``<integrator type="course"><string name="mode" value="$mode"/>``
+switches between scan-line and path tracing with ``-D mode=...``, the mode its
+BSDFs take too.
 
 .. code-block:: xml
 
@@ -92,7 +94,7 @@ class Scanline:
         self.shadows = bool(props.get("shadows", False))
         self.clamp = bool(props.get("clamp", True))
         self.hide_emitters = bool(props.get("hide_emitters", False))
-        # Accepted and ignored, so one <integrator type="$mode"> element can give
+        # Accepted and ignored, so one <integrator type="course"> element can give
         # the hdr path tracer a max_depth: scan-line lighting is direct only.
         props.get("max_depth", -1)
 
@@ -206,16 +208,24 @@ def transmittance(scene, si, ds, active) -> mi.Spectrum:
     return dr.select(active, T, 0.0)
 
 
-def make_hdr(props: mi.Properties):
-    """Mitsuba's ``path`` integrator, with the given properties."""
-    config = {"type": "path"}
+COURSE_MODES = {"scanline": "scanline", "hdr": "path"}     # course's mode -> integrator
+
+
+def make_course(props: mi.Properties):
+    """``course``: the integrator its ``mode`` names, with the other properties."""
+    mode = props["mode"] if "mode" in props else "hdr"
+    if mode not in COURSE_MODES:
+        raise ValueError(f"course: parameter 'mode' = {mode!r} is invalid; valid: "
+                         + ", ".join(f'"{m}"' for m in COURSE_MODES))
+    config = {"type": COURSE_MODES[mode]}
     for key in props.keys():
-        config[key] = props[key]
+        if key != "mode":
+            config[key] = props[key]
     return mi.load_dict(config)
 
 
 def register() -> None:
-    """Register ``scanline`` and ``hdr`` for the active variant."""
+    """Register ``scanline`` and ``course`` for the active variant."""
     cls = bind(Scanline, "SamplingIntegrator")
     mi.register_integrator("scanline", lambda props: cls(props))
-    mi.register_integrator("hdr", make_hdr)
+    mi.register_integrator("course", make_course)

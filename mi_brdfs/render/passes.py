@@ -32,7 +32,8 @@ def render_passes(scene, spp: int, passes: int = 8, seed: int = 0, show=None,
     """Render ``spp`` samples per pixel in passes with distinct seeds; the
     spp-weighted mean of every film channel as an (H, W, C) NumPy array.
 
-    ``show(done_spp, total_spp, elapsed_s)`` is called after each pass;
+    ``show(done_spp, total_spp, elapsed_s)`` is called at the start (0 spp)
+    and after each pass;
     ``log(message)`` receives informational messages (whether and why the
     passes were not frozen). ``freeze=False`` traces every pass."""
     import mitsuba as mi
@@ -55,6 +56,8 @@ def render_passes(scene, spp: int, passes: int = 8, seed: int = 0, show=None,
                 say(f"passes not frozen: the warm-up render failed ({frozen.why(error)})")
 
     total, done, start = None, 0, time.perf_counter()
+    if show:
+        show(0, spp, 0.0)
     for i, n in enumerate(chunks):
         pass_seed = seed * len(chunks) + i
         image = None

@@ -1,3 +1,3 @@
 """The ``mi-brdfs`` command (:mod:`.cli`) and what it runs: :mod:`.compare`,
-:mod:`.validate`, :mod:`.bench`, :mod:`.analysis`, and :mod:`.catalog`, the
-configurations the reports, the benchmarks and the tests run."""
+:mod:`.validate`, :mod:`.bench`, :mod:`.fit`, :mod:`.explore`, and the tools
+they share (:mod:`.analysis`, :mod:`.chi2`, :mod:`.groundtruth`, :mod:`.tables`)."""

@@ -31,7 +31,7 @@ cell that has not converged there is counted in :attr:`unconverged`, and
 the test fails: the report says so instead of a p-value it cannot trust.
 
 The test keeps its power: a density that is wrong by a few per cent (the
-catalog's negative controls) is still rejected, since finer integration
+models' negative controls) is still rejected, since finer integration
 only removes the integration error, never the sampler's.
 """
 from __future__ import annotations
@@ -86,11 +86,14 @@ class ConvergedChiSquareTest(mi.chi2.ChiSquareTest):
             self.fail = True
         self.pdf = from_numpy(mi.Float, table)
         self.pdf_sum = dr.sum(self.pdf) / self.sample_count
-        if not float(np.min(table)) >= 0:
-            self._log("Failure: Encountered a cell with a negative PDF value")
+        lowest = float(np.min(table))
+        if not lowest >= 0:                                      # (NaN included)
+            self._log(f"Failure: the density integrates to {lowest:.4g} over a cell: it is "
+                      "negative (or NaN) somewhere")
             self.fail = True
         if self.pdf_sum[0] > 1.1:
-            self._log(f"Failure: PDF integrates to a value greater than 1.0: {self.pdf_sum[0]}")
+            self._log(f"Failure: the density integrates to {self.pdf_sum[0]:.4f} over the "
+                      "domain, more than 1 (+ 10 % for the integration error)")
             self.fail = True
         self.histogram_end = time.time()       # (Mitsuba's name for the pdf's timing)
 

@@ -34,59 +34,28 @@ Every number and path is checked before work starts. Errors print one line,
 from __future__ import annotations
 
 import argparse
-import math
 import os
-import re
 import sys
 import time
 from importlib import metadata
-from typing import Callable, NoReturn
+from typing import NoReturn
 
+from .. import _interrupt as interrupt
 from ..render import output, tonemap
 from . import outputs
+from .arguments import info_logger, integer, real, set_threads, set_variant, set_verbosity
+from .errors import CLIError, one_line
 from .progress import Progress
 
+DESCRIPTION = ("The course lecture's BRDF models as Mitsuba 3 plugins: render scenes, compare "
+               "renders, validate the plugins, benchmark them and fit them to materials. "
+               "Each command's flags: mi-brdfs COMMAND --help.")
 UINT32_MAX = 2**32 - 1
 REPORT_MODULES = ("matplotlib", "scipy", "flip_evaluator")
 KNOWN_DEFINES = {"spp": 1, "res": 1}      # the bundled scenes' numeric defaults -> minimum
 
 
-class CLIError(Exception):
-    """An error reported as one line, without a traceback."""
 
-
-# ----------------------------------------------------------------------------
-#  Checked numbers (argparse types: a bad value is one line, exit 1)
-# ----------------------------------------------------------------------------
-
-def integer(low: int, high: int | None = None) -> Callable[[str], int]:
-    """An argparse type: an integer in [low, high]."""
-    valid = f"an integer >= {low}" if high is None else f"an integer from {low} to {high}"
-
-    def parse(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"invalid value {text!r}; valid: {valid}") from None
-        if value < low or (high is not None and value > high):
-            raise argparse.ArgumentTypeError(f"invalid value {text}; valid: {valid}")
-        return value
-    return parse
-
-
-def real(low: float, high: float) -> Callable[[str], float]:
-    """An argparse type: a finite number in [low, high]."""
-    valid = f"a number from {low:g} to {high:g}"
-
-    def parse(text: str) -> float:
-        try:
-            value = float(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"invalid value {text!r}; valid: {valid}") from None
-        if not math.isfinite(value) or not low <= value <= high:
-            raise argparse.ArgumentTypeError(f"invalid value {text}; valid: {valid}")
-        return value
-    return parse
 
 
 def parse_defines(pairs: list[str]) -> dict[str, str]:
@@ -106,46 +75,6 @@ def parse_defines(pairs: list[str]) -> dict[str, str]:
         defines[key] = value
     return defines
 
-
-# ----------------------------------------------------------------------------
-#  Mitsuba's settings: variant, threads, log level
-# ----------------------------------------------------------------------------
-
-def set_variant(name: str | None) -> str:
-    import mitsuba as mi
-
-    import mi_brdfs
-    if name:
-        if name not in mi.variants():
-            raise CLIError(f"-m {name} is not a Mitsuba variant here; valid: "
-                           f"{', '.join(mi.variants())}")
-        try:
-            mi.set_variant(name)
-        except Exception as error:
-            raise CLIError(f"-m {name} cannot be used here: {one_line(error)}") from None
-    return mi_brdfs.register()
-
-
-def set_threads(count: int | None) -> None:
-    if count is not None:
-        import drjit as dr
-        dr.set_thread_count(count)
-
-
-def set_verbosity(level: int) -> None:
-    """0: warnings only; 1: Mitsuba's Info; 2: Debug (and Dr.Jit's Info); 3: Trace."""
-    import drjit as dr
-    import mitsuba as mi
-    mi.set_log_level([mi.LogLevel.Warn, mi.LogLevel.Info, mi.LogLevel.Debug,
-                      mi.LogLevel.Trace][min(level, 3)])
-    if level >= 2:
-        dr.set_log_level(dr.LogLevel.Info if level == 2 else dr.LogLevel.Debug)
-
-
-def info_logger(prog: str, level: int) -> Callable[[str], None]:
-    if level < 1:
-        return lambda msg: None
-    return lambda msg: print(f"{prog}: {msg}", file=sys.stderr)
 
 
 # ----------------------------------------------------------------------------
@@ -213,9 +142,21 @@ def check_render_numbers(scene, args: argparse.Namespace, defines: dict[str, str
     return spp
 
 
+def check_bundled_defines(name: str, defines: dict[str, str]) -> None:
+    """The bundled scenes use ``mode`` as the plugins' mode and as the
+    integrator's type: any other value is one line naming the two."""
+    from ..bsdfs.base import MODES
+    mode = defines.get("mode")
+    if mode is not None and mode not in MODES:
+        raise CLIError(f"-D mode={mode} is invalid for the bundled scene {name}; valid: "
+                       f"{', '.join(MODES)}")
+
+
 def cmd_render(args: argparse.Namespace) -> int:
     scene_path, bundled = resolve_scene(args.scene)
     defines = parse_defines(args.defines)
+    if bundled:
+        check_bundled_defines(args.scene, defines)
     targets = args.output or [default_output(scene_path, bundled)]
     for path in targets:
         output.check_extension(path)
@@ -229,6 +170,7 @@ def cmd_render(args: argparse.Namespace) -> int:
     import drjit as dr
     import mitsuba as mi
 
+    from ..render import memory
     from ..render.passes import render_passes, split_passes
 
     # parallel=False: scene loading with Python plugins in worker threads failed
@@ -238,6 +180,9 @@ def cmd_render(args: argparse.Namespace) -> int:
 
     log = info_logger(args.prog, args.verbose)
     chunks = split_passes(spp, args.passes)        # the passes that run (none empty)
+    problem = memory.refusal(memory.need(scene))
+    if problem:
+        raise CLIError(problem)
     width, height = scene.sensors()[0].film().crop_size()
     log(f"{scene_path}: {width}x{height}, {spp} spp in {len(chunks)} passes, "
         f"seed {args.seed}, "
@@ -371,7 +316,7 @@ def common(threads: bool = True, variant: bool = False) -> Parser:
 
 def parser() -> Parser:
     v = versions()
-    p = Parser(prog="mi-brdfs", description=__doc__.splitlines()[0])
+    p = Parser(prog="mi-brdfs", description=DESCRIPTION)
     p.add_argument("--version", action="version",
                    version=f"mi-brdfs {v['mi_brdfs']} (Mitsuba {v['mitsuba']}, "
                            f"Dr.Jit {v['drjit']})")
@@ -459,22 +404,28 @@ def parser() -> Parser:
                    help="run on this Dask distributed scheduler (e.g. tcp://host:8786) "
                         "instead of local processes")
     f.set_defaults(run=cmd_fit)
+    from .explore import add_parser as add_explore      # mi-brdfs explore (tools/explore)
+    add_explore(sub, common)
     for name, command in sub.choices.items():
         command.set_defaults(prog=command.prog)
     return p
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = parser().parse_args(argv)
+    prog, args = "mi-brdfs", None
     try:
-        return args.run(args)
+        args = parser().parse_args(argv)
+        prog = args.prog
+        with interrupt.watching(prog):          # Ctrl-C within a second, even in a kernel
+            return args.run(args)
     except KeyboardInterrupt:
-        print(f"{args.prog}: interrupted", file=sys.stderr)
+        interrupt.finished()
+        print(f"{prog}: interrupted", file=sys.stderr)
         return 130
     except Exception as error:       # one clear line, unless --traceback
-        if args.traceback:
+        if args is None or args.traceback:
             raise
-        print(f"{args.prog}: error: {describe(error, args.command)}", file=sys.stderr)
+        print(f"{prog}: error: {describe(error, args.command)}", file=sys.stderr)
         return 1
 
 
@@ -485,17 +436,6 @@ def describe(error: BaseException, command: str) -> str:
     return one_line(error)
 
 
-def one_line(error: BaseException) -> str:
-    """The gist of an error on one line. Mitsuba wraps a Python plugin's
-    exception with its traceback: keep only the exception's own last line."""
-    text = str(error).strip()
-    lines = [line.strip() for line in text.splitlines() if line.strip()]
-    if not lines:
-        return type(error).__name__
-    if "Traceback (most recent call last)" in text:
-        where = re.search(r"At (.+?\(line \d+, col \d+\))", lines[0])
-        return (f"{where.group(1)}: " if where else "") + lines[-1]
-    return " ".join(lines)
 
 
 if __name__ == "__main__":

@@ -15,8 +15,11 @@ Report folders (``compare -o DIR``, ``validate -o DIR``) are one of:
   report may have subfolders, e.g. the bench's fit sweep), and nothing else.
 
 Anything else (an existing file, a folder holding other files, a folder that
-holds one of the command's inputs) is refused with one line, before any work,
-and nothing is touched. The report is written into a temporary folder beside
+holds one of the command's inputs, a symbolic link) is refused with one line,
+before any work, and nothing is touched, however the path is spelled: a
+trailing separator (``out/``, ``link/``) names the same folder as without, and
+a relative path (``.`` included) is taken from the current folder
+(:func:`report_target`). The report is written into a temporary folder beside
 the target and moved into place when complete; a previous report is replaced
 by deleting only the files its marker lists (and the subfolders that held
 them, once empty). File and folder modes follow the
@@ -31,6 +34,7 @@ import shutil
 import tempfile
 from typing import Iterable, Iterator
 
+from .. import _interrupt as interrupt
 from ..render.exr import dir_mode, file_mode
 
 MARKER = ".mi-brdfs-report"
@@ -96,9 +100,17 @@ def _inside(path: str, folder: str) -> bool:
     return os.path.commonpath([path, folder]) == folder
 
 
+def report_target(path: str) -> str:
+    """``path`` as the folder it names: absolute, with trailing separators,
+    ``.`` and ``..`` resolved as written (``out/`` is ``out``, a link
+    ``elink/`` is the link ``elink``, ``.`` the current folder)."""
+    return os.path.abspath(path)
+
+
 def check_report_dir(path: str, inputs: Iterable[str] = (), option: str = "-o") -> None:
     """Raise OutputError unless ``path`` may receive a report (see the module doc)."""
     shown = f"{option} {path}"
+    path = report_target(path)
     for name in inputs:
         if _inside(name, path):
             raise OutputError(f"{shown} holds the input {name}; give another folder")
@@ -135,19 +147,22 @@ def report_dir(path: str, command: str, inputs: Iterable[str] = ()) -> Iterator[
     left as it was."""
     inputs = list(inputs)
     check_report_dir(path, inputs)
+    path = report_target(path)
     parent = os.path.dirname(os.path.abspath(path))
     tmp = tempfile.mkdtemp(prefix=".tmp-report-", dir=parent)
     try:
-        yield tmp
-        files = [n for n in _listing(tmp) if not n.endswith("/")]
-        with open(os.path.join(tmp, MARKER), "w") as f:
-            json.dump({"command": command, "files": files}, f, indent=1)
-        for name in files + [MARKER]:
-            os.chmod(os.path.join(tmp, name), file_mode())
-        for folder, _, _ in os.walk(tmp):
-            os.chmod(folder, dir_mode())         # mkdtemp made it 0700
-        check_report_dir(path, inputs)           # unchanged while we worked
-        _move_into_place(tmp, path)
+        with interrupt.temporary(tmp):           # removed too if Ctrl-C ends the process
+            yield tmp
+            files = [n for n in _listing(tmp) if not n.endswith("/")]
+            with open(os.path.join(tmp, MARKER), "w") as f:
+                json.dump({"command": command, "files": files}, f, indent=1)
+            for name in files + [MARKER]:
+                os.chmod(os.path.join(tmp, name), file_mode())
+            for folder, _, _ in os.walk(tmp):
+                os.chmod(folder, dir_mode())     # mkdtemp made it 0700
+            check_report_dir(path, inputs)       # unchanged while we worked
+            with interrupt.critical():           # a previous report is set aside meanwhile
+                _move_into_place(tmp, path)
     finally:
         if os.path.isdir(tmp):
             shutil.rmtree(tmp)                   # our own temporary folder only

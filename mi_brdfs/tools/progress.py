@@ -32,7 +32,8 @@ def _seconds(s: float | None) -> str:
 
 
 class Progress:
-    """``show(done_spp, total_spp, elapsed_s)`` callback for ``render_passes``."""
+    """``show(done_spp, total_spp, elapsed_s)`` callback for ``render_passes``:
+    at the start (done 0), then after each pass."""
 
     def __init__(self, label: str, stream: TextIO | None = None, enabled: bool = True,
                  unit: str = "spp"):
@@ -44,6 +45,14 @@ class Progress:
 
     def __call__(self, done: int, total: int, elapsed: float) -> None:
         if not self.enabled:
+            return
+        if done == 0:                       # the start: the first pass also compiles
+            if self.terminal:
+                self._bar(0, total, None)
+            else:
+                self.stream.write(f"{self.label}: 0/{total} {self.unit}, first pass "
+                                  "(it also traces and compiles the kernels)\n")
+                self.stream.flush()
             return
         self.history.append((done, elapsed))
         left = eta(self.history, total)

@@ -1,4 +1,4 @@
-"""Build and check the shipped albedo tables of :mod:`mi_brdfs.bsdfs.energy`.
+"""Build and check the shipped albedo tables of energy compensation (:mod:`mi_brdfs.bsdfs.compensation`).
 
     python -m mi_brdfs.tools.tables                 # rebuild mi_brdfs/bsdfs/data/albedo.npz
     python -m mi_brdfs.tools.tables --only walk/ggx # rebuild some tables, keep the others
@@ -31,10 +31,88 @@ from dataclasses import replace
 
 import numpy as np
 
+import drjit as dr
+import mitsuba as mi
+
 from .._jit import from_numpy
+from ..bsdfs import compensation
+from ..bsdfs.grid import hemisphere_direction
 
 MU_85 = 0.0871557      # cos 85°
 CHECK_ROWS = (4, 12, 20, 28)   # the μ rows of a walk table that --check walks again
+
+
+# ----------------------------------------------------------------------------
+#  Building the single-scattering tables (JIT variants)
+# ----------------------------------------------------------------------------
+
+MU_MIN = 1e-4             # the cos θ at which the μ = 0 node is computed
+SEED = 20261130           # of the quadrature's jitter
+WALK_SEED = 20160701      # of the walk
+
+
+def build(spec: compensation.AlbedoSpec, samples: int | None = None, batch: int = 1 << 22) -> np.ndarray:
+    """E at every node of ``spec``, by quadrature over the model's sampler
+    (``samples`` strata per axis, default the spec's). A parameter node at
+    infinity (a roughness axis's last) holds E = 0."""
+    samples = samples or spec.samples
+    nodes = [a.nodes() for a in spec.axes]
+    grid = np.stack(np.meshgrid(*nodes, indexing="ij"), axis=-1).reshape(-1, len(nodes))
+    d = spec.directions
+    infinite = np.isinf(grid).any(axis=1)
+    grid = grid[~infinite]
+    mu = np.maximum(grid[:, 0], MU_MIN)
+    wi_np = hemisphere_direction(mu, grid[:, 1] if d == 2 else None)
+    params_np = grid[:, d:]
+    # Jittered strata (a fixed seed): the midpoints alone alias with samplers
+    # that split the square (GGX's visible normals: 0.998 instead of 0.976).
+    rng = np.random.default_rng(SEED)
+    i, j = (a.ravel() for a in np.meshgrid(np.arange(samples), np.arange(samples), indexing="ij"))
+    ux = (i + rng.random(i.size)) / samples
+    uy = (j + rng.random(j.size)) / samples
+    per = samples * samples
+    out = np.empty(len(grid))
+    step = max(1, batch // per)
+    for start in range(0, len(grid), step):
+        sl = slice(start, min(start + step, len(grid)))
+        n = sl.stop - sl.start
+        node = from_numpy(mi.UInt32, np.repeat(np.arange(n, dtype=np.uint32), per))
+        take = lambda a: dr.gather(mi.Float, from_numpy(mi.Float, a[sl]), node)
+        wi = mi.Vector3f(take(wi_np[:, 0]), take(wi_np[:, 1]), take(wi_np[:, 2]))
+        params = [take(params_np[:, k]) for k in range(params_np.shape[1])]
+        sample2 = from_numpy(mi.Point2f, (np.tile(ux, n), np.tile(uy, n)))
+        wo = spec.sample(wi, sample2, *params)
+        pdf = spec.pdf(wi, wo, *params)
+        ok = (pdf > 0) & (mi.Frame3f.cos_theta(wo) > 0)
+        value = dr.select(ok, spec.f(wi, wo, *params) / dr.select(ok, pdf, 1.0), 0.0)
+        total = dr.block_sum(mi.Float64(value), per)
+        out[sl] = np.asarray(total) / per
+    values = np.zeros(len(infinite))
+    values[~infinite] = np.clip(out, 0.0, 1.0)
+    values = values.reshape(tuple(a.n for a in spec.axes))
+    if spec.valid_up_to is not None:
+        k = spec.directions
+        x = spec.axes[k].nodes()
+        last = int(np.searchsorted(x, spec.valid_up_to, side="right")) - 1   # last valid node
+        v = np.moveaxis(values, k, 0)
+        d1 = 1.5 * v[last] - 2.0 * v[last - 1] + 0.5 * v[last - 2]     # one-sided slope
+        d2 = v[last] - 2.0 * v[last - 1] + v[last - 2]                 # and curvature
+        for j in range(last + 1, len(x)):
+            v[j] = v[last] + (j - last) * d1 + 0.5 * (j - last) ** 2 * d2
+        values = np.clip(np.moveaxis(v, 0, k), 0.0, 1.0)
+    return values
+
+
+def specs() -> list:
+    """Every table every model declares (its ``tables()``), AlbedoSpecs and
+    WalkSpecs, each once."""
+    from ..bsdfs import PLUGINS
+    found = []
+    for cls in PLUGINS:
+        for spec in cls.tables():
+            if spec.name not in {s.name for s in found}:
+                found.append(spec)
+    return found
 
 
 def refined(spec):
@@ -46,12 +124,9 @@ def refined(spec):
 def interpolation_error(spec, table, samples: int, bounded: bool = False) -> tuple[float, float]:
     """(max |E - E~| at cell centres, the same for cos θ >= cos 85°);
     ``bounded``: only where the parameters of unbounded axes are <= 1."""
-    import drjit as dr
-    import mitsuba as mi
 
-    from ..bsdfs import energy
     fine = refined(spec)
-    exact = energy.build(fine, samples)
+    exact = build(fine, samples)
     centres = tuple(slice(1, None, 2) for _ in fine.axes)
     exact = exact[centres]
     points = [a.nodes()[1::2] for a in fine.axes]
@@ -75,13 +150,11 @@ def interpolation_error(spec, table, samples: int, bounded: bool = False) -> tup
 
 def check_walk(spec, paths: int, log) -> str:
     """(MC noise, interpolation error along alpha and F0) of a walk table, on CHECK_ROWS."""
-    import mitsuba as mi
 
-    from ..bsdfs import energy
     from . import groundtruth
-    shipped = energy.shipped(spec)
+    shipped = compensation.shipped(spec)
     rows = list(CHECK_ROWS)
-    again = groundtruth.table(spec, paths=paths, seed=energy.WALK_SEED + 1, rows=rows)
+    again = groundtruth.table(spec, paths=paths, seed=WALK_SEED + 1, rows=rows)
     walked = spec.axes[1].nodes() <= spec.alpha_max
     noise = np.abs(again[rows][:, walked] - shipped[rows][:, walked]).max()
     # cell centres in alpha (between walked nodes) and F0, against the interpolation
@@ -89,65 +162,60 @@ def check_walk(spec, paths: int, log) -> str:
     a_mid = fine.axes[1].nodes()[1::2]
     a_mid = a_mid[a_mid < spec.axes[1].nodes()[walked][-1]]
     f_mid = fine.axes[2].nodes()[1::2]
-    grid = energy.Table(spec.axes, shipped).grid
+    grid = compensation.Table(spec.axes, shipped).grid
     worst = 0.0
     for i in rows:
         mu = spec.axes[0].nodes()[i]
-        walked = groundtruth.albedo(spec.distribution, max(mu, energy.MU_MIN), a_mid, f_mid,
-                                    paths, energy.WALK_SEED)
+        walked = groundtruth.albedo(spec.distribution, max(mu, MU_MIN), a_mid, f_mid,
+                                    paths, WALK_SEED)
         A, F = np.meshgrid(a_mid, f_mid, indexing="ij")
         interp = np.asarray(grid(from_numpy(mi.Float, np.full(A.size, mu)),
                                  from_numpy(mi.Float, A), from_numpy(mi.Float, F))).reshape(A.shape)
         worst = max(worst, float(np.abs(interp - walked).max()))
         log(f"  {spec.name}: checked mu row {i}")
     return (f"{spec.name}: axes {'x'.join(str(a.n) for a in spec.axes)}; Monte-Carlo noise "
-            f"{noise:.1e} ({paths} paths vs the shipped {energy.WALK_PATHS}, rows {rows}); "
+            f"{noise:.1e} ({paths} paths vs the shipped {compensation.WALK_PATHS}, rows {rows}); "
             f"interpolation error along alpha and F0 {worst:.1e} (where walked)")
 
 
 def main(argv: list[str] | None = None) -> int:
     """Rebuild the albedo tables, or (--check) measure their errors."""
-    import mi_brdfs  # noqa: F401  (LLVM set-up, variant)
-    import drjit as dr
-    import mitsuba as mi
-
-    from ..bsdfs import energy
-
     parser = argparse.ArgumentParser(prog="python -m mi_brdfs.tools.tables",
-                                     description=main.__doc__)
+                                     description="Rebuild the albedo tables, or (--check) measure their errors.")
     parser.add_argument("--check", action="store_true", help="measure the shipped tables' errors")
     parser.add_argument("--only", nargs="+", metavar="NAME",
                         help="only these tables (names as printed; the others are kept)")
     parser.add_argument("--samples", type=int,
                         help="quadrature samples per axis (default: each table's, "
-                             f"{energy.SAMPLES} for most)")
-    parser.add_argument("--paths", type=int, default=energy.WALK_PATHS,
-                        help=f"random-walk paths per node (default {energy.WALK_PATHS}; "
+                             f"{compensation.SAMPLES} for most)")
+    parser.add_argument("--paths", type=int, default=compensation.WALK_PATHS,
+                        help=f"random-walk paths per node (default {compensation.WALK_PATHS}; "
                              "--check: a quarter of it)")
     args = parser.parse_args(argv)
     if not dr.is_jit_v(mi.Float):
         mi.set_variant("llvm_ad_rgb")
-    specs = [s for s in energy.specs() if not args.only or s.name in args.only]
-    unknown = set(args.only or ()) - {s.name for s in specs}
+    every = specs()
+    chosen = [s for s in every if not args.only or s.name in args.only]
+    unknown = set(args.only or ()) - {s.name for s in chosen}
     if unknown:
         parser.error(f"unknown tables {sorted(unknown)}; valid: "
-                     f"{', '.join(s.name for s in energy.specs())}")
+                     f"{', '.join(s.name for s in every)}")
     log = lambda text: print(text, file=sys.stderr)
     out = {}
-    if args.only and os.path.exists(energy.DATA):
-        with np.load(energy.DATA) as f:
+    if args.only and os.path.exists(compensation.DATA):
+        with np.load(compensation.DATA) as f:
             out = {k: f[k] for k in f.files}
-    for spec in specs:
+    for spec in chosen:
         start = time.perf_counter()
-        walk = isinstance(spec, energy.WalkSpec)
+        walk = isinstance(spec, compensation.WalkSpec)
         if args.check and walk:
             print(check_walk(spec, max(1000, args.paths // 4), log)
                   + f" [{time.perf_counter() - start:.0f} s]")
             continue
         if args.check:
-            shipped = energy.table(spec)
+            shipped = compensation.table(spec)
             samples = args.samples or spec.samples
-            half = energy.build(spec, samples // 2)
+            half = build(spec, samples // 2)
             diff = np.abs(half - shipped.grid.values)
             if spec.valid_up_to is not None:    # beyond: extrapolated, not the model's
                 k = spec.directions
@@ -168,17 +236,17 @@ def main(argv: list[str] | None = None) -> int:
             out[spec.name] = groundtruth.table(spec, paths=args.paths, log=log)
             what = f"{args.paths} paths"
         else:
-            out[spec.name] = energy.build(spec, args.samples)
+            out[spec.name] = build(spec, args.samples)
             what = f"{args.samples or spec.samples}^2 samples"
         log(f"{spec.name}: {out[spec.name].size} nodes x {what}, "
             f"{time.perf_counter() - start:.1f} s")
     if args.check:
         return 0
-    os.makedirs(os.path.dirname(energy.DATA), exist_ok=True)
-    tmp = energy.DATA + ".tmp.npz"
+    os.makedirs(os.path.dirname(compensation.DATA), exist_ok=True)
+    tmp = compensation.DATA + ".tmp.npz"
     np.savez_compressed(tmp, **{k: v.astype(np.float32) for k, v in out.items()})
-    os.replace(tmp, energy.DATA)
-    print(f"wrote {energy.DATA}")
+    os.replace(tmp, compensation.DATA)
+    print(f"wrote {compensation.DATA}")
     return 0
 
 

@@ -1,18 +1,20 @@
 """The conformance battery: every registered plugin, in both modes, through the
-same checks, driven by its catalog entry (mi_brdfs/tools/catalog.py) and its
+same checks, driven by its cases (its module's ``cases()``, mi_brdfs/bsdfs/cases.py) and its
 parameter declarations (``PARAMS``, ``OPTIONS``):
 
 1. load, eval, pdf, sample: finite, non-negative, upwards, flags;
 2. χ² of the sampler against the pdf (Mitsuba's test), with one Šidák
    correction over every χ² run of the suite, and a negative control per model;
-3. sample weight × pdf = eval, and pdf() = the pdf sample() reports;
+3. sample weight × pdf = eval, pdf() = the pdf sample() reports, and
+   eval_pdf() = (eval(), pdf());
 4. reciprocity (hdr) where the model declares it;
 5. the white furnace, by an independent quadrature: bounded, or 1 where the
    model promises it (energy compensation);
 6. the numerical extremes: directions down to cos θ = 1e-30 and 0, parameter
    extremes — values, pdfs, sample weights and gradients finite, non-negative;
 7. gradients against finite differences, for every parameter, and for colours
-   and weights also at their bounds (one-sided);
+   and weights also at their bounds (one-sided); the sample weight's gradient
+   that of eval / pdf at the sampled direction;
 8. bad values refused with one line (plugin, parameter, value, valid range) at
    load time and at ``params.update()``; bad options too;
 9. traverse and update; a lobe is dropped only when it cannot matter;
@@ -25,15 +27,16 @@ parameter declarations (``PARAMS``, ``OPTIONS``):
 A model's own module keeps only its independent transcription of the lecture
 and what is particular to it.
 
-The cases are built from the declarations and the catalog alone: no BSDF is
+The tests are built from the declarations and the cases alone: no BSDF is
 loaded while pytest collects them, and each model's entry is built on its
-own, so a broken model or catalog entry fails its own tests only (a plugin
+own, so a broken model or its cases fail its own tests only (a plugin
 whose entry cannot be built gets one failing case per test, ``NAME-entry``;
 tests/bsdfs/test_registry.py checks that).
 """
 from __future__ import annotations
 
 import gc
+import itertools
 import math
 
 import numpy as np
@@ -43,10 +46,10 @@ import drjit as dr
 import mitsuba as mi
 
 from mi_brdfs.bsdfs import BY_NAME
-from mi_brdfs.bsdfs.base import ParameterError
-from mi_brdfs.tools import catalog
-from mi_brdfs.tools.catalog import ENTRIES
-from support import (CHI2_ALPHA, BrokenEntry, albedo, assert_refused, chi2_test, chi2_test_count,
+from mi_brdfs.bsdfs.params import ParameterError
+from mi_brdfs.bsdfs import cases
+from mi_brdfs.bsdfs.cases import ALL as CASES
+from support import (CHI2_ALPHA, BrokenCases, albedo, assert_refused, chi2_test, chi2_test_count,
                      config_id, direct_call_failures, eval_and_pdf, error_line, finite,
                      finite_difference, floats, points, f32, mirror_pairs,
                      property_form_failures, random_hemisphere, surface, vec)
@@ -56,15 +59,15 @@ MODES = ("hdr", "scanline")
 
 
 def from_entries(make, nargs: int = 1) -> list:
-    """pytest params: ``make(name, entry)`` for every plugin's catalog entry. A
+    """pytest params: ``make(name, cases)`` for every plugin's cases. A
     plugin whose entry cannot be built gets one case, failing with its error
     (conftest.pytest_pyfunc_call), instead of a collection error for all."""
     params = []
     for name in PLUGINS:
         try:
-            params += make(name, catalog.entry(name))
+            params += make(name, cases.of(name))
         except Exception as error:
-            params.append(pytest.param(*[BrokenEntry(name, error)] * nargs, id=f"{name}-entry"))
+            params.append(pytest.param(*[BrokenCases(name, error)] * nargs, id=f"{name}-cases"))
     return params
 
 
@@ -96,12 +99,12 @@ def wants_scanline(config: dict) -> dict:
 
 
 # ----------------------------------------------------------------------------
-#  0. The catalog covers every plugin
+#  0. Every plugin's cases cover every check
 # ----------------------------------------------------------------------------
 
 @pytest.mark.parametrize("name", PLUGINS)
-def test_catalog_covers_the_plugin(name):
-    entry = ENTRIES[name]
+def test_cases_cover_the_plugin(name):
+    entry = CASES[name]
     chi2_modes = {m for c in entry.chi2 for m in modes_of(c.config)}
     assert chi2_modes == set(MODES), f"{name}: χ² in {chi2_modes} only"
     for part in ("consistency", "furnace", "extremes", "interior"):
@@ -161,13 +164,13 @@ def test_chi2_detects_a_wrong_pdf(name, tmp_path, monkeypatch):
     """Negative control: a sampler tested against the pdf of a slightly
     different parameter must be rejected, or the χ² tests prove nothing."""
     monkeypatch.chdir(tmp_path)
-    sampled, pdf, theta = ENTRIES[name].negative
-    chi2 = chi2_test(sampled, pdf, theta, ENTRIES[name].extra.get("negative_phi", 0.0))
+    sampled, pdf, theta = CASES[name].negative
+    chi2 = chi2_test(sampled, pdf, theta, CASES[name].negative_phi)
     assert not chi2.run(significance_level=ALPHA, test_count=CHI2_TEST_COUNT, quiet=True)
 
 
 # ----------------------------------------------------------------------------
-#  3. Sample weight x pdf = eval
+#  3. Sample weight x pdf = eval; eval_pdf = (eval, pdf)
 # ----------------------------------------------------------------------------
 
 def random_viewers(rng, n):
@@ -192,10 +195,14 @@ def test_sample_weight_matches_eval_over_pdf(config, rng):
     bs, weight = bsdf.sample(ctx, si, floats(rng.random(n)),
                              points(rng.random(n), rng.random(n)))
     value, pdf = bsdf.eval_pdf(ctx, si, bs.wo)
+    alone = (bsdf.eval(ctx, si, bs.wo), bsdf.pdf(ctx, si, bs.wo))     # what eval_pdf joins
+    dr.eval(weight, value, pdf, bs.wo, bs.pdf, *alone)
     weight, value = np.array(weight).T, np.array(value).T
     bs_pdf, pdf, wo = np.array(bs.pdf), np.array(pdf), np.array(bs.wo).T
     for a in (weight, value, bs_pdf, pdf):
         assert finite(a) and (a >= 0).all()
+    np.testing.assert_allclose(np.array(alone[0]).T, value, rtol=1e-6, atol=1e-9)
+    np.testing.assert_allclose(np.array(alone[1]), pdf, rtol=1e-6, atol=1e-9)
     ok = bs_pdf > 0
     # A real sampler: a usable direction for a good part of the upper viewers
     # (toon's blinn cone over the whole hemisphere reflects ~2/3 below).
@@ -219,7 +226,7 @@ RECIPROCAL = from_entries(lambda name, e: [pytest.param(c, id=config_id(c))
 @pytest.mark.parametrize("config", RECIPROCAL)
 def test_reciprocity(config, rng):
     """hdr: eval(w_i, w_o)/cos θ_o = eval(w_o, w_i)/cos θ_i (the BRDF is symmetric)."""
-    wi, wo = mirror_pairs(rng, 4096, ENTRIES[config["type"]].lobe_width, min_cos=0.01)
+    wi, wo = mirror_pairs(rng, 4096, CASES[config["type"]].lobe_width, min_cos=0.01)
     bsdf = mi.load_dict(config)
     forward = eval_and_pdf(bsdf, wi, wo)[0] / wo[:, 2:3]
     backward = eval_and_pdf(bsdf, wo, wi)[0] / wi[:, 2:3]
@@ -298,8 +305,10 @@ def differentiable_keys(params) -> list[str]:
             and dr.is_array_v(params[k]) and dr.is_float_v(params[k])]
 
 
-@pytest.mark.parametrize("config", from_entries(lambda name, e: each_mode(e.extremes)))
-def test_extremes(config):
+def assert_finite_everywhere(config: dict) -> None:
+    """Values, pdfs, sample weights and their gradients (every differentiable
+    parameter enabled, through traverse) are finite and non-negative at the
+    extreme directions and sample numbers."""
     bsdf = mi.load_dict(config)
     params = mi.traverse(bsdf)
     keys = differentiable_keys(params)
@@ -320,14 +329,65 @@ def test_extremes(config):
     dr.eval(*outputs.values(), bs.wo)          # one launch, then plain copies
     for what, a in outputs.items():
         x = np.array(dr.detach(a))
-        assert finite(x), f"{what} not finite"
-        assert (x >= 0).all(), f"{what} negative"
+        assert finite(x), f"{config_id(config)}: {what} not finite"
+        assert (x >= 0).all(), f"{config_id(config)}: {what} negative"
     assert finite(dr.detach(bs.wo))
     dr.backward(dr.sum(dr.sum(value)) + dr.sum(pdf) + dr.sum(dr.sum(weight)) + dr.sum(bs.pdf))
     grads = [dr.grad(params[key]) for key in keys]
     dr.eval(*grads)
     for key, grad in zip(keys, grads):
-        assert finite(grad), f"gradient of {key} not finite"
+        assert finite(grad), f"{config_id(config)}: gradient of {key} not finite"
+
+
+@pytest.mark.parametrize("config", from_entries(lambda name, e: each_mode(e.extremes)))
+def test_extremes(config):
+    assert_finite_everywhere(config)
+
+
+def option_variants(cls) -> list[dict]:
+    """Every combination of a plugin's choice options (not mode or sampling),
+    each in both modes and, for a compensable plugin, compensated."""
+    choices = [o for o in cls.OPTIONS if o.choices]
+    combos = [dict(zip((o.name for o in choices), values))
+              for values in itertools.product(*(o.choices for o in choices))]
+    modes = [{"mode": m} for m in MODES]
+    if cls.compensable:
+        modes.append({"mode": "hdr", "energy_compensation": True})
+    return [{"type": cls.name, **c, **m} for c in combos for m in modes]
+
+
+@pytest.mark.parametrize("name, p, end", [
+    pytest.param(name, p, end, id=f"{name}-{p.name}-{end}")
+    for name, cls in PLUGINS.items() for p in cls.PARAMS if not p.optional
+    for end in ("lo", "hi")])
+def test_declared_bounds(name, p, end):
+    """Every parameter at each end of the range its plugin states (an open end:
+    the largest float32), the others at their defaults, for every option
+    combination and mode: what a plugin accepts it evaluates finitely. The
+    range is the one a loaded instance checks (e.g. Blinn's alpha <= 1);
+    combinations the plugin refuses (EON's table, Blinn's D with alpha_u) are
+    left out: refused for what they combine, not for the value's range."""
+    def refused(config) -> str | None:
+        try:
+            return mi.load_dict(config) and None
+        except Exception as error:              # (Mitsuba wraps the ParameterError)
+            line = error_line(error)
+            assert "is invalid; valid:" in line, line
+            return line
+    tried = 0
+    for config in option_variants(PLUGINS[name]):
+        if refused(config):
+            continue
+        declared = mi.load_dict(config).state.params.get(p.name, p)   # (read only if given)
+        lo, hi = declared.far()
+        config = {**config, p.name: lo if end == "lo" else hi}
+        why = refused(config)
+        if why is not None:
+            assert declared.valid() not in why, why       # a combination, not the range
+            continue
+        assert_finite_everywhere(config)
+        tried += 1
+    assert tried
 
 
 # ----------------------------------------------------------------------------
@@ -364,7 +424,7 @@ def test_gradient_matches_finite_differences(config, p, where, x, rng):
     traverse, as an optimiser does) = a finite difference of fresh loads:
     central inside the range, one-sided at a bound (where a lobe whose colour
     or weight is 0 must still get its gradient)."""
-    wi, wo = mirror_pairs(rng, 1024, ENTRIES[config["type"]].lobe_width, min_cos=0.1)
+    wi, wo = mirror_pairs(rng, 1024, CASES[config["type"]].lobe_width, min_cos=0.1)
     config = {**config, p.name: x}
     bsdf = mi.load_dict(config)
     params = mi.traverse(bsdf)
@@ -380,6 +440,42 @@ def test_gradient_matches_finite_differences(config, p, where, x, rng):
         x, h, side)
     assert abs(fd) > 1e-3, f"the loss does not depend on {p.name} here (fd = {fd})"
     np.testing.assert_allclose(grad, fd, rtol=2e-2)
+
+
+@pytest.mark.parametrize("config", from_entries(lambda name, e: [
+    pytest.param(e.interior[0], id=config_id(e.interior[0]))]))
+def test_sample_weight_gradient_is_that_of_eval_over_pdf(config, rng):
+    """A path tracer differentiated as a whole (Mitsuba's ``path``) takes the
+    derivatives of the sample weights: at each sampled direction, held fixed
+    as the integrators hold it, the weight's gradient with respect to every
+    parameter is that of eval / pdf there (whose gradient the test above
+    checks), under a different weight per lane. Each model's first interior
+    configuration (the compensated ones take the same code path, at 2-10 s of
+    compiling each)."""
+    bsdf = mi.load_dict(config)
+    params = mi.traverse(bsdf)
+    keys = differentiable_keys(params)
+    for key in keys:
+        dr.enable_grad(params[key])
+    params.update()
+    n = 4096
+    wi = random_hemisphere(rng, n, 0.05)
+    si, ctx, lanes = surface(wi), mi.BSDFContext(), floats(rng.uniform(0.5, 1.5, n))
+    bs, weight = bsdf.sample(ctx, si, floats(rng.random(n)), points(rng.random(n), rng.random(n)))
+    assert np.mean(np.array(dr.detach(bs.pdf)) > 0) > 0.5
+
+    def gradients(per_lane) -> list[np.ndarray]:
+        for k in keys:
+            dr.clear_grad(params[k])
+        dr.backward(dr.sum((per_lane[0] + per_lane[1] + per_lane[2]) * lanes))
+        return [np.array(dr.grad(params[k]), dtype=np.float64).ravel() for k in keys]
+
+    of_weight = gradients(weight)
+    value, pdf = bsdf.eval_pdf(ctx, si, dr.detach(bs.wo))
+    of_ratio = gradients(dr.select(dr.detach(bs.pdf) > 0, value / pdf, 0.0))
+    for key, a, b in zip(keys, of_weight, of_ratio):
+        assert np.abs(b).max() > 0, key
+        np.testing.assert_allclose(a, b, rtol=1e-4, atol=1e-6 * np.abs(b).max(), err_msg=key)
 
 
 # ----------------------------------------------------------------------------
@@ -403,7 +499,7 @@ def bad_values(p) -> list[tuple[str, object, float]]:
     if p.hi is not None:
         bad = p.hi + 0.5 * max(1.0, abs(p.hi))
         out.append(("above", bad, bad))
-        out.append(("inf", math.inf, math.inf))
+    out.append(("inf", math.inf, math.inf))          # never valid, whatever the range
     out.append(("nan", math.nan, math.nan))
     if p.kind != "float" and p.lo is not None:
         bad = p.lo - 0.5 * max(1.0, abs(p.lo))
@@ -439,7 +535,7 @@ def test_bad_value_is_refused_at_update(config, p, value, shown):
 
 
 OPTION_CASES = [pytest.param(name, o, id=f"{name}-{o.name}")
-                for name, cls in PLUGINS.items() for o in cls.options()]
+                for name, cls in PLUGINS.items() for o in cls.all_options()]
 
 
 @pytest.mark.parametrize("name, option", OPTION_CASES)
@@ -491,7 +587,7 @@ def test_traverse_exposes_every_parameter_read(config):
     bsdf = mi.load_dict(config)
     params = mi.traverse(bsdf)
     names = {k.split(".")[0] for k in params.keys()}
-    assert names == set(bsdf.params)
+    assert names == set(bsdf.state.params)
     for key in params.keys():
         if key.endswith(".to_uv"):          # a bitmap's own transform
             continue
@@ -503,11 +599,11 @@ def test_traverse_exposes_every_parameter_read(config):
 def test_update_matches_a_fresh_load(config, rng):
     """Every parameter changed through traverse + update() gives the BSDF a
     fresh load with those values gives."""
-    wi, wo = mirror_pairs(rng, 1024, ENTRIES[config["type"]].lobe_width, min_cos=0.05)
+    wi, wo = mirror_pairs(rng, 1024, CASES[config["type"]].lobe_width, min_cos=0.05)
     bsdf = mi.load_dict(config)
     params = mi.traverse(bsdf)
     changed = {}
-    for p in bsdf.params.values():
+    for p in bsdf.state.params.values():
         if isinstance(config.get(p.name), float):
             lo = p.lo if p.lo is not None else -1.0
             hi = p.probe_hi()
@@ -524,7 +620,7 @@ def switches(name: str) -> list[tuple]:
     """(Param, value) of plugin ``name`` that switch a lobe off at load time:
     a colour at 0, a weight at either end (loaded: at run time)."""
     default = mi.load_dict({"type": name}).flags()
-    read = mi.load_dict({"type": name}).params
+    read = mi.load_dict({"type": name}).state.params
     found = []
     for p in PLUGINS[name].PARAMS:
         if p.role not in ("colour", "weight") or p.name not in read:
@@ -572,7 +668,7 @@ def test_a_number_folded_at_0_or_1_unfolds_when_it_changes(name, rng):
     (BRDF.switch); changed through update(), the BSDF equals a fresh load with
     the new value, and what its calls trace changes with it (trace_key: a
     frozen render records again instead of replaying the folded number)."""
-    wi, wo = mirror_pairs(rng, 1024, ENTRIES[name].lobe_width, min_cos=0.05)
+    wi, wo = mirror_pairs(rng, 1024, CASES[name].lobe_width, min_cos=0.05)
     cases = [(p, v) for p in PLUGINS[name].PARAMS if p.kind == "float" for v in (0.0, 1.0)
              if (p.lo is None or p.lo <= v) and (p.hi is None or v <= p.hi)]
     assert cases

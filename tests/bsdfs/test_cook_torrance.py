@@ -373,3 +373,163 @@ def test_blinn_roughness_is_at_most_one():
 def test_extreme_roughness_is_accepted(alpha):
     """rho = 0 and tiny values are clamped to ALPHA_MIN = 1e-4, as Mitsuba does."""
     mi.load_dict({"type": "cook_torrance", "distribution": "ggx", "alpha": alpha})
+
+
+# ----------------------------------------------------------------------------
+#  The far end of the roughness range
+# ----------------------------------------------------------------------------
+
+@pytest.mark.parametrize("distribution", ["beckmann", "ggx"])
+@pytest.mark.parametrize("geometry", GEOMETRIES)
+def test_roughness_far_end(distribution, geometry):
+    """alpha is accepted up to the largest float32 and evaluated at ALPHA_MAX
+    (1e6) beyond it: the single-scattering lobe is at its limit there (no
+    reflection: an albedo below 1e-6 up to 89.9°), the same at 1e7 and at the
+    largest float32, and infinity is refused."""
+    from mi_brdfs.bsdfs.params import FLOAT_MAX
+    from mi_brdfs.bsdfs.microfacet import ALPHA_MAX
+    config = {"type": "cook_torrance", "distribution": distribution, "geometry": geometry,
+              "k": 0.0, "f0": 1.0}
+    thetas = (0.0, 60.0, 85.0, 89.0, 89.9)
+    at_max = np.array([albedo(mi.load_dict({**config, "alpha": ALPHA_MAX}), t) for t in thetas])
+    assert (at_max >= 0).all() and at_max.max() < 1e-6, at_max
+    for beyond in (1e7, FLOAT_MAX):
+        far = np.array([albedo(mi.load_dict({**config, "alpha": beyond}), t) for t in thetas])
+        np.testing.assert_array_equal(far, at_max)
+    # the walk's albedo at the table's infinite node, for the compensated lobe
+    white = mi.load_dict({**config, "alpha": FLOAT_MAX, "energy_compensation": True})
+    np.testing.assert_allclose([albedo(white, t).mean() for t in (0.0, 60.0, 85.0)], 1.0,
+                               rtol=0.01)
+    assert_refused({**config, "alpha": math.inf}, "alpha", "inf", f"[0, {FLOAT_MAX:.7g}]")
+    # anisotropic: each axis evaluated at ALPHA_MAX_ANISOTROPIC (1e4) beyond it
+    from mi_brdfs.bsdfs.microfacet import ALPHA_MAX_ANISOTROPIC as HI
+    at_hi = np.array([albedo(mi.load_dict({**config, "alpha_u": HI, "alpha_v": HI}), t, phi)
+                      for t in thetas[:-1] for phi in (0.0, 90.0)])
+    assert (at_hi >= 0).all() and at_hi.max() < 4e-5, at_hi
+    far = np.array([albedo(mi.load_dict({**config, "alpha_u": FLOAT_MAX, "alpha_v": FLOAT_MAX}),
+                           t, phi) for t in thetas[:-1] for phi in (0.0, 90.0)])
+    np.testing.assert_array_equal(far, at_hi)
+
+
+# ----------------------------------------------------------------------------
+#  Anisotropic roughness (alpha_u along s, alpha_v along t), as roughconductor
+# ----------------------------------------------------------------------------
+
+ANISOTROPIC = [(0.05, 0.3), (0.3, 0.05), (0.7, 0.1), (0.02, 0.02)]
+
+
+def anisotropic_pairs(rng, n, au, av, min_cos=0.02):
+    """(d, w): half the lights reflect the viewer about a half vector drawn
+    within a few roughnesses of the normal along each axis (inside the lobe)."""
+    d, w = random_hemisphere(rng, n, min_cos), random_hemisphere(rng, n, min_cos)
+    m = n // 2
+    h = np.column_stack([au * rng.normal(size=m), av * rng.normal(size=m), np.ones(m)])
+    h /= np.linalg.norm(h, axis=1, keepdims=True)
+    d[:m] = 2 * lecture.dot(w[:m], h)[:, None] * h - w[:m]
+    keep = d[:, 2] > min_cos
+    return d[keep], w[keep]
+
+
+def conductor(distribution, **roughness) -> dict:
+    return {"type": "cook_torrance", "k": 0.0, "f0": 1.0, "geometry": "smith",
+            "distribution": distribution, **roughness}
+
+
+@pytest.mark.parametrize("distribution", ["ggx", "beckmann"])
+@pytest.mark.parametrize("au, av", ANISOTROPIC)
+def test_anisotropic_equals_roughconductor(rng, distribution, au, av):
+    d, w = anisotropic_pairs(rng, 8192, au, av)
+    ours = mi.load_dict(conductor(distribution, alpha_u=au, alpha_v=av))
+    ref = mi.load_dict({"type": "roughconductor", "distribution": distribution,
+                        "alpha_u": au, "alpha_v": av})
+    v, p = eval_and_pdf(ours, w, d)
+    v_ref, p_ref = eval_and_pdf(ref, w, d)
+    big = v_ref[:, 0] > 1e-6 * v_ref[:, 0].max()
+    assert big.sum() > 1000
+    np.testing.assert_allclose(v[big], v_ref[big], rtol=RTOL[distribution])
+    np.testing.assert_allclose(v[~big], v_ref[~big], atol=1e-6 * v_ref[:, 0].max())
+    np.testing.assert_allclose(p, p_ref, rtol=RTOL[distribution], atol=1e-6)
+
+
+@pytest.mark.parametrize("distribution", ["ggx", "beckmann"])
+@pytest.mark.parametrize("geometry", GEOMETRIES)
+def test_anisotropic_axes_turn_with_the_azimuth(rng, distribution, geometry):
+    """Physics: (alpha_u, alpha_v) seen from azimuth φ is (alpha_v, alpha_u) seen
+    from φ + 90° (both directions turned about the normal); and an equal pair
+    is the isotropic alpha."""
+    d, w = anisotropic_pairs(rng, 4096, 0.1, 0.4)
+    turn = lambda v: np.column_stack([-v[:, 1], v[:, 0], v[:, 2]])
+    config = {"type": "cook_torrance", "distribution": distribution, "geometry": geometry,
+              "k": 0.3, "f0": 0.4}
+    a = eval_and_pdf(mi.load_dict({**config, "alpha_u": 0.1, "alpha_v": 0.4}), w, d)
+    b = eval_and_pdf(mi.load_dict({**config, "alpha_u": 0.4, "alpha_v": 0.1}), turn(w), turn(d))
+    for x, y in zip(a, b):
+        np.testing.assert_allclose(x, y, rtol=2e-5, atol=1e-7 * np.abs(x).max())
+    iso = eval_and_pdf(mi.load_dict({**config, "alpha": 0.25}), w, d)
+    equal = eval_and_pdf(mi.load_dict({**config, "alpha_u": 0.25, "alpha_v": 0.25}), w, d)
+    for x, y in zip(iso, equal):
+        np.testing.assert_allclose(x, y, rtol=2e-6, atol=1e-7 * np.abs(x).max())
+
+
+@pytest.mark.parametrize("given, name, value, valid", [
+    ({"alpha": 0.2, "alpha_u": 0.1}, "alpha", "0.2", "either alpha or alpha_u/alpha_v, not both"),
+    ({"distribution": "blinn", "alpha_v": 0.1}, "alpha_v", "0.1",
+     'distribution "beckmann" or "ggx"'),
+])
+def test_anisotropic_bad_input_is_one_line(given, name, value, valid):
+    assert_refused({"type": "cook_torrance", **given}, name, value, valid)
+
+
+def plane_with_uv_turned(bsdf: dict, degrees: float, res: int = 40) -> dict:
+    """A square mesh whose texture coordinates (so its tangent s, along dp/du)
+    are turned by ``degrees`` about its normal, under a point light, seen at an
+    angle; a sphere beside it (its tangents follow its parametrisation)."""
+    t = np.radians(degrees)
+    corners = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], dtype=np.float32)
+    rot = np.array([[np.cos(t), -np.sin(t)], [np.sin(t), np.cos(t)]])
+    uv = (corners[:, :2] @ rot.T).astype(np.float32)
+    mesh = mi.Mesh("plane", 4, 2, has_vertex_texcoords=True)
+    params = mi.traverse(mesh)
+    params["vertex_positions"] = from_numpy(mi.Float, corners.ravel())
+    params["vertex_texcoords"] = from_numpy(mi.Float, uv.ravel())
+    params["faces"] = from_numpy(mi.UInt32, np.array([0, 1, 2, 0, 2, 3], dtype=np.uint32))
+    params.update()
+    mesh.set_bsdf(mi.load_dict(bsdf))
+    T = mi.ScalarTransform4f
+    return {"type": "scene",
+            # light samples only: both BSDFs are evaluated at the same directions
+            "integrator": {"type": "direct", "emitter_samples": 1, "bsdf_samples": 0},
+            "sensor": {"type": "perspective", "fov": 40,
+                       "to_world": T().look_at(origin=[0, -3, 2.5], target=[0.3, 0, 0],
+                                               up=[0, 0, 1]),
+                       "film": {"type": "hdrfilm", "width": res, "height": res,
+                                "rfilter": {"type": "box"}},
+                       "sampler": {"type": "independent", "sample_count": 4}},
+            "plane": mesh,
+            "sphere": {"type": "sphere", "center": [1.4, 0.6, 0.5], "radius": 0.5,
+                       "bsdf": bsdf},
+            "key": {"type": "point", "position": [0.5, 1.5, 1.5],
+                    "intensity": {"type": "rgb", "value": 10}}}
+
+
+@pytest.mark.parametrize("distribution", ["ggx", "beckmann"])
+def test_anisotropic_renders_as_roughconductor_in_turned_frames(distribution):
+    """A mesh whose tangents are turned by its texture coordinates, and a
+    sphere: the same image as roughconductor, pixel by pixel (the same camera
+    and light samples); turning the tangents changes the image (the
+    anisotropy follows the shading frame)."""
+    roughness = {"alpha_u": 0.05, "alpha_v": 0.4}
+    images = {}
+    for name, bsdf in (("ours", conductor(distribution, **roughness)),
+                       ("theirs", {"type": "roughconductor", "distribution": distribution,
+                                   **roughness})):
+        for degrees in (0.0, 35.0):
+            scene = mi.load_dict(plane_with_uv_turned(bsdf, degrees))
+            images[name, degrees] = np.array(mi.render(scene, seed=3))
+    for degrees in (0.0, 35.0):
+        ref = images["theirs", degrees]
+        assert ref.max() > 0.1
+        np.testing.assert_allclose(images["ours", degrees], ref, rtol=RTOL[distribution],
+                                   atol=1e-5 * ref.max())
+    turned = np.abs(images["ours", 35.0] - images["ours", 0.0]).max()
+    assert turned > 0.1 * images["ours", 0.0].max()

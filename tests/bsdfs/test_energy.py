@@ -1,7 +1,7 @@
-"""Energy compensation (mi_brdfs/bsdfs/energy.py) against its truths: the
+"""Energy compensation (mi_brdfs/bsdfs/compensation.py) against its truths: the
 shipped tables against closed forms, a fresh quadrature and a fresh random
 walk; the compensated albedo of cook_torrance against the random walk of
-Heitz et al. 2016 (mi_brdfs/tools/groundtruth.py); colours that scale linearly;
+Heitz et al. 2016 (mi_brdfs/tools/groundtruth/); colours that scale linearly;
 roughness derivatives against finite differences of the smooth truth. (The
 white furnace at 1 of every compensated model, m_S = 0.5 reflecting 0.5,
 reciprocity, χ², frozen evaluation and gradients through the tables are in
@@ -25,14 +25,15 @@ import drjit as dr
 import mitsuba as mi
 
 from mi_brdfs._jit import from_numpy
-from mi_brdfs.bsdfs import energy
-from mi_brdfs.bsdfs.cook_torrance import compensation, spec as albedo_spec
+from mi_brdfs.bsdfs import compensation
+from mi_brdfs.bsdfs.cook_torrance import spec as albedo_spec, walk_residual
+from mi_brdfs.tools import tables
 from mi_brdfs.tools import groundtruth
 from support import albedo, direction, rgb, surface, vec
 
-SPECS = {spec.name: spec for spec in energy.specs()}
-SINGLE = sorted(n for n, s in SPECS.items() if isinstance(s, energy.AlbedoSpec))
-WALKS = sorted(n for n, s in SPECS.items() if isinstance(s, energy.WalkSpec))
+SPECS = {spec.name: spec for spec in tables.specs()}
+SINGLE = sorted(n for n, s in SPECS.items() if isinstance(s, compensation.AlbedoSpec))
+WALKS = sorted(n for n, s in SPECS.items() if isinstance(s, compensation.WalkSpec))
 REFERENCE = json.load(open(os.path.join(os.path.dirname(__file__), "walk_reference.json")))
 THETAS_85 = [t for t in REFERENCE["theta"] if t <= 85]
 THETAS_FEW = [0, 30, 60, 75, 85]
@@ -40,7 +41,7 @@ THETAS_FEW = [0, 30, 60, 75, 85]
 
 def table_value(spec_name, mu, *params):
     v = mi.Vector3f(math.sqrt(1 - mu * mu), 0.0, mu)
-    t = energy.table(SPECS[spec_name])
+    t = compensation.table(SPECS[spec_name])
     return float(np.array(t(v, *(mi.Float(p) for p in params)))[0])
 
 
@@ -81,8 +82,8 @@ def test_shipped_tables_are_the_models_albedo(name):
     (Regenerate with python -m mi_brdfs.tools.tables.)"""
     spec = SPECS[name]
     coarse = replace(spec, axes=tuple(replace(a, n=(a.n - 1) // 4 + 1) for a in spec.axes))
-    fresh = energy.build(coarse, samples=48)
-    shipped = energy.table(spec).grid.values[tuple(slice(None, None, 4) for _ in spec.axes)]
+    fresh = tables.build(coarse, samples=48)
+    shipped = compensation.table(spec).grid.values[tuple(slice(None, None, 4) for _ in spec.axes)]
     if spec.valid_up_to is not None:      # beyond: extrapolated from the nodes next to it
         valid = coarse.axes[spec.directions].nodes() <= spec.valid_up_to
         fresh, shipped = fresh[:, valid], shipped[:, valid]
@@ -97,7 +98,7 @@ def test_walk_tables_are_the_walk(name):
     the Monte-Carlo noise; W = 1 for F0 = 1 (every path leaves); the nodes
     beyond alpha_max hold the last walked node's W."""
     spec = SPECS[name]
-    shipped = energy.shipped(spec)
+    shipped = compensation.shipped(spec)
     mu_axis, alpha_axis, f0_axis = spec.axes
     last = np.flatnonzero(alpha_axis.nodes() <= spec.alpha_max)[-1]
     row, nodes = 16, slice(1, last + 1, 3)
@@ -110,10 +111,10 @@ def test_walk_tables_are_the_walk(name):
 
 
 @pytest.mark.parametrize("table, params", [
-    (lambda: compensation("ggx", "smith"), 2),
-    (lambda: compensation("blinn", "cook_torrance"), 2),
-    (lambda: energy.complement(SPECS["phong"]), 1),
-    (lambda: energy.complement(SPECS["ward/anisotropic"]), 2)], ids=["ggx-smith", "blinn-vcavity",
+    (lambda: walk_residual("ggx", "smith"), 2),
+    (lambda: walk_residual("blinn", "cook_torrance"), 2),
+    (lambda: compensation.complement(SPECS["phong"]), 1),
+    (lambda: compensation.complement(SPECS["ward/anisotropic"]), 2)], ids=["ggx-smith", "blinn-vcavity",
                                                                    "phong", "ward-anisotropic"])
 def test_average_is_the_integral_of_the_interpolated_table(table, params, rng):
     """G_avg(p) = (1/π) ∫ g~(ω, p) cos θ dω for the interpolated table g~, at
@@ -144,9 +145,9 @@ def test_multiple_scattering_series():
     0 for a black one, the geometric series of bounces in between."""
     e_avg = mi.Float(0.6)
     for c, expected in ((1.0, 1.0), (0.0, 0.0), (0.5, 0.25 * 0.6 / (1 - 0.5 * 0.4))):
-        assert float(np.array(energy.ms_series(mi.Float(c), e_avg))[0]) == pytest.approx(expected)
+        assert float(np.array(compensation.ms_series(mi.Float(c), e_avg))[0]) == pytest.approx(expected)
     series = sum(0.5 ** (k + 2) * 0.6 * 0.4 ** k for k in range(200))   # c^(k+2) E_avg (1-E_avg)^k
-    assert float(np.array(energy.ms_series(mi.Float(0.5), e_avg))[0]) == pytest.approx(series)
+    assert float(np.array(compensation.ms_series(mi.Float(0.5), e_avg))[0]) == pytest.approx(series)
 
 
 def test_table_error_is_measured():
@@ -155,7 +156,7 @@ def test_table_error_is_measured():
     mi_brdfs.tools.tables --check measures them all; here GGX/Smith)."""
     from mi_brdfs.tools.tables import interpolation_error
     spec = albedo_spec("ggx", "smith")
-    _, up_to_85 = interpolation_error(spec, energy.table(spec), samples=32)
+    _, up_to_85 = interpolation_error(spec, compensation.table(spec), samples=32)
     assert up_to_85 < 1e-2
     dr.eval()
 
@@ -207,7 +208,7 @@ def test_other_microsurfaces_against_the_nearest_walk(distribution, geometry):
     the walk of the nearest Smith microsurface (Beckmann at the same α for
     Blinn, the same D for the V-cavity) the residual is the single
     scattering's own (the V-cavity reflects more than the walk at small F0:
-    there is nothing to add), within the bound docs/guide/energy.md states
+    there is nothing to add), within the bound docs/guide/compensation.md states
     (groundtruth.RESIDUAL_BOUND; relative, where the walk reflects >= 1 %).
     White surfaces still reflect 1 (the battery's furnace)."""
     worst = 0.0
@@ -357,7 +358,7 @@ def test_roughness_derivative_is_continuous_at_the_nodes(config, axis, textured)
     """Just below and just above a table node the derivative is the same (a
     multilinear table's jumped by ~18 % of its range there)."""
     from mi_brdfs.bsdfs import BY_NAME
-    spec = mi.load_dict(config).albedo_spec()
+    spec = mi.load_dict(config).compensation().table.specs[0]     # its single scattering
     node = float(next(a for a in spec.axes if a.name == axis).nodes()[8])
     wi, wo = direction_pairs()
     below = roughness_derivative(config, axis, node * (1 - 1e-4), wi, wo, textured)

@@ -56,6 +56,7 @@ def test_zero_reflectance_has_no_lobe():
     assert bsdf.flags() == 0 and bsdf.component_count() == 0
     bsdf = mi.load_dict({"type": "lambert"})
     assert bsdf.flags() == mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide
+    assert bsdf.component_count() == 1 and bsdf.flags(0) == bsdf.flags()
 
 
 def test_albedo_is_the_reflectance():

@@ -213,7 +213,7 @@ def test_table_error_is_bounded_and_falls_with_resolution(rng, capsys):
 
 
 def test_table_default_resolution_is_64():
-    assert load(method="table").table_resolution == 64
+    assert load(method="table").options.table_resolution == 64
 
 
 # ----------------------------------------------------------------------------

@@ -1,9 +1,9 @@
-"""One plugin registry (``mi_brdfs.bsdfs.PLUGINS``) and what derives from it:
-the package's exports, the plugins Mitsuba loads by name, the catalog's
-entries, the lobe plots, the bench's models, the transcription tests, the
-bundled scenes and their renders. A model
-added to the registry alone appears everywhere or fails here, saying where it
-is missing. And the declarations every model is built from (``Param``,
+"""One plugin registry (``mi_brdfs.bsdfs.PLUGINS``) and what derives from it
+and from each model's own module: the package's exports, the plugins Mitsuba
+loads by name, its cases (the battery's, the validation report's, the lobe
+plots, the bench's models), its lecture-transcription test. A model added to
+the registry alone appears everywhere or fails here, saying where it is
+missing. And the declarations every model is built from (``Param``,
 ``Option``) are checked when its class is defined.
 """
 import os
@@ -17,12 +17,11 @@ import pytest
 
 import mi_brdfs
 from mi_brdfs.bsdfs import BY_NAME, PLUGINS
-from mi_brdfs.bsdfs.base import BRDF, DeclarationError, Option, Param
-from mi_brdfs import scenes
-from mi_brdfs.tools import catalog
+from mi_brdfs.bsdfs.base import BRDF
+from mi_brdfs.bsdfs.params import DeclarationError, Option, Param
+from mi_brdfs.bsdfs import cases
 
 TESTS = Path(__file__).parent
-RENDERS = TESTS.parent.parent / "scenes" / "renders"
 NAMES = [cls.name for cls in PLUGINS]
 
 
@@ -37,30 +36,22 @@ def test_every_plugin_is_everywhere(name):
     assert getattr(mi_brdfs, cls.__name__) is cls, "not exported by mi_brdfs"
     assert cls.__name__ in mi_brdfs.__all__
     assert type(mi.load_dict({"type": name})).__name__ == cls.__name__, "not registered"
-    assert isinstance(catalog.entry(name), catalog.Entry)
-    assert catalog.LOBES[name]["type"] == name, "no lobe plot"
-    assert name in catalog.FURNACE and name in catalog.report_chi2(), "not in the validation report"
-    assert any(c["type"] == name for _, c in catalog.bench_models()), "not in bench's models"
+    assert isinstance(cases.of(name), cases.Cases), "no cases() in its module"
+    assert cases.lobe_configs()[name]["type"] == name, "no lobe plot"
+    assert cases.report_furnace(name) and cases.report_chi2()[name], \
+        "not in the validation report"
+    assert any(c["type"] == name for _, c in cases.costs()), "not in the bench's models"
     if cls.compensable:
-        assert any(c["type"] == name for _, c in catalog.BENCH_ENERGY), \
-            "compensable, but not in catalog.BENCH_ENERGY"
+        assert any(c["type"] == name for _, c in cases.of(name).energy), \
+            "compensable, but its cases have no energy row for the bench"
     assert (TESTS / f"test_{name}.py").is_file(), \
         f"no lecture-transcription test tests/bsdfs/test_{name}.py (CONTRIBUTING.md)"
-    assert scenes.path(name) is not None, f"no bundled scene scenes/{name}.xml"
-    for mode in ("scanline", "hdr"):
-        assert (RENDERS / f"{name}_{mode}.png").is_file(), \
-            f"no render scenes/renders/{name}_{mode}.png (sh scenes/renders/make.sh)"
 
 
-def test_the_catalog_has_entries_for_registered_plugins_only():
-    assert list(catalog.ENTRIES) == NAMES
-    assert set(catalog.BUILDERS) <= set(NAMES), "an entry for a plugin that is not registered"
-
-
-def test_a_plugin_without_an_entry_is_named():
-    with pytest.raises(LookupError, match="plugin 'nonesuch' has no catalog entry: add a "
-                                          r"function @builds\('nonesuch'\)"):
-        catalog.entry("nonesuch")
+def test_cases_are_of_registered_plugins_only():
+    assert list(cases.ALL) == NAMES
+    with pytest.raises(KeyError):
+        cases.of("nonesuch")
 
 
 # ----------------------------------------------------------------------------
@@ -70,7 +61,7 @@ def test_a_plugin_without_an_entry_is_named():
 @pytest.mark.parametrize("kwargs, message", [
     ({"kind": "scaler"}, "kind 'scaler' is unknown; valid: spectrum, scalar, float"),
     ({"role": "color"}, "role 'color' is unknown; valid: colour, weight, shape"),
-    ({"default": -0.5}, r"default -0.5 is outside its range \[0, inf\]"),
+    ({"default": -0.5}, r"default -0.5 is outside its range \[0, 1e\+06\]"),
     ({"default": 2.0, "hi": 1.0}, r"default 2.0 is outside its range \[0, 1\]"),
     ({"default": float("nan")}, "default nan is outside"),
     ({"default": "0.5"}, "default '0.5' is outside"),
@@ -101,28 +92,32 @@ def test_a_model_declaring_a_name_twice_is_refused():
 
 
 # ----------------------------------------------------------------------------
-#  A broken catalog entry fails its own model's tests only
+#  Broken cases fail their own model's tests only
 # ----------------------------------------------------------------------------
 
 BREAKER = '''"""A pytest plugin (-p breaker), loaded before collection: breaks lambert's
-catalog entry (its builder raises) and one of phong's configurations (a
-misspelt parameter, which Mitsuba refuses at load time)."""
-from mi_brdfs.tools import catalog
+cases (its cases() raises) and one of phong's configurations (a misspelt
+parameter, which Mitsuba refuses at load time)."""
+from mi_brdfs.bsdfs import Lambert, Phong
 
-@catalog.builds("lambert")
-def no_entry(name):
-    raise KeyError("a misspelt key in the entry")
 
-@catalog.builds("phong")
-def misspelt(name, build=catalog.BUILDERS["phong"]):
-    entry = build(name)
-    entry.interior.append({"type": name, "exponant": 20.0})
-    return entry
+def no_cases(cls):
+    raise KeyError("a misspelt key in the cases")
+
+
+def misspelt(cls, build=Phong.cases.__func__):
+    built = build(cls)
+    built.interior.append({"type": cls.name, "exponant": 20.0})
+    return built
+
+
+Lambert.cases = classmethod(no_cases)
+Phong.cases = classmethod(misspelt)
 '''
 
 
-def test_a_broken_entry_fails_its_own_tests_only(tmp_path):
-    """The battery, collected with lambert's entry and a phong configuration
+def test_broken_cases_fail_their_own_tests_only(tmp_path):
+    """The battery, collected with lambert's cases and a phong configuration
     broken: no collection error; lambert's and phong's tests fail (those that
     use what is broken), every other model's pass."""
     (tmp_path / "breaker.py").write_text(BREAKER)
@@ -132,7 +127,7 @@ def test_a_broken_entry_fails_its_own_tests_only(tmp_path):
     run = subprocess.run(
         [sys.executable, "-m", "pytest", "-q", "-p", "breaker", "-p", "no:cacheprovider",
          f"--junitxml={report}", str(TESTS / "test_battery.py"),
-         "-k", "catalog_covers or update_matches or traverse_exposes or lambert"],
+         "-k", "cases_cover or update_matches or traverse_exposes or lambert"],
         capture_output=True, text=True, env=env, cwd=TESTS.parent.parent, timeout=600)
     assert run.returncode == 1, run.stdout[-3000:] + run.stderr[-3000:]   # 1: tests failed
     cases = ElementTree.parse(report).getroot().iter("testcase")
@@ -143,10 +138,23 @@ def test_a_broken_entry_fails_its_own_tests_only(tmp_path):
             pytest.fail(f"{name}: an error, not a failure")
         (failed if case.find("failure") is not None else passed).add(name)
     assert all("lambert" in n or "exponant" in n for n in failed), sorted(failed)
-    entry_cases = {n for n in failed | passed if "lambert-entry" in n}
-    assert entry_cases and entry_cases <= failed
-    assert "test_catalog_covers_the_plugin[lambert]" in failed
+    broken = {n for n in failed | passed if "lambert-cases" in n}
+    assert broken and broken <= failed
+    assert "test_cases_cover_the_plugin[lambert]" in failed
     assert any("exponant" in n for n in failed)
     others = {n for n in passed if not ("lambert" in n or "exponant" in n)}
     assert {n.split("[")[1].split("-")[0] for n in others if "[" in n} >= set(NAMES) - {"lambert"}
     assert any(n.startswith("test_load_eval_pdf_sample[lambert") for n in passed)  # its class
+
+
+def test_what_is_made_from_the_modules_is_up_to_date():
+    """The README's plugin table and the shipped albedo tables are what
+    ``python -m mi_brdfs.tools.regenerate`` makes from the models' modules."""
+    from mi_brdfs.tools import regenerate
+    with open(regenerate.README, encoding="utf-8") as f:
+        readme = f.read()
+    assert regenerate.readme_with_table(readme) == readme, \
+        "README.md's plugin table is stale: python -m mi_brdfs.tools.regenerate"
+    assert regenerate.missing_tables() == []
+    for cls in PLUGINS:
+        assert f"[`{cls.name}`]" in readme

@@ -323,7 +323,7 @@ SPEC_RAMP = [[0.2, 0.2, 0.2]] * 3 + [[1.5, 1.5, 1.5]]
 # The ramps' own rules (every parameter's range and choice: the battery).
 ERRORS = [
     ({"diffuse_ramp": ramp_texture([[0.1, 0.1, 0.1], [-0.5, 0.2, 0.2]])},
-     "diffuse_ramp", "-0.5", "[0, inf]"),
+     "diffuse_ramp", "-0.5", "[0, 1e+06]"),
     ({"diffuse_ramp": ramp_texture(RAMP), "diffuse_shade": 0.1}, "diffuse_shade", "0.1",
      "not with diffuse_ramp"),
     ({"specular_ramp": ramp_texture(RAMP), "specular_threshold": 0.5}, "specular_threshold",

@@ -322,3 +322,17 @@ def test_twosided_agrees_with_the_path_tracer():
     assert ours.max() > 0.1
     np.testing.assert_allclose(ours, path, rtol=1e-5, atol=1e-7)
     np.testing.assert_allclose(ours, builtin, rtol=1e-5, atol=1e-7)
+
+
+@pytest.mark.parametrize("mode, kind", [("scanline", "Scanline"), ("hdr", "PathIntegrator")])
+def test_course_is_the_integrator_its_mode_names(mode, kind):
+    """``course`` picks the scan-line integrator or Mitsuba's path tracer by its
+    mode (the bundled scenes' one default for the BSDFs and the integrator),
+    passes its other properties on, and refuses another mode in one line."""
+    integrator = mi.load_dict({"type": "course", "mode": mode, "max_depth": 5})
+    assert kind in type(integrator).__name__ or kind in str(integrator)
+    if mode == "hdr":
+        assert "max_depth = 5" in str(integrator)
+    with pytest.raises(Exception, match="course: parameter 'mode' = 'foo' is invalid; valid: "
+                                        '"scanline", "hdr"'):
+        mi.load_dict({"type": "course", "mode": "foo"})

@@ -12,8 +12,13 @@ import numpy as np
 import pytest
 
 from mi_brdfs.bsdfs import BY_NAME
-from mi_brdfs.tools import bench, catalog, cli
+from mi_brdfs.bsdfs import cases
+from mi_brdfs.bsdfs.compensation import AlbedoSpec
+from mi_brdfs.tools import bench, cli
 from mi_brdfs.tools.bench import anatomy
+
+# cook_torrance as roughconductor, GGX: the twin the tracing checks look into
+GGX = next(t for t in cases.twins() if t.ours.get("distribution") == "ggx")
 
 
 def test_efficiency_by_hand():
@@ -109,7 +114,7 @@ def test_dead_lobes_are_not_traced(results):
 
 def test_spheres_scene_has_one_material_per_sphere():
     import mitsuba as mi
-    d = bench.spheres_scene("cook_torrance", 7, 8)
+    d = bench.spheres_scene(GGX.label, "plugin", 7, 8)
     spheres = [v for k, v in d.items() if k.startswith("sphere")]
     assert len(spheres) == 7
     assert len({s["bsdf"]["alpha"] for s in spheres}) == 7          # seven different materials
@@ -119,10 +124,13 @@ def test_spheres_scene_has_one_material_per_sphere():
 def test_materials_each_kind_and_count_in_its_own_process(results):
     _, r, _ = results
     rows = r["groups"]["materials"]
+    spread = [t for t in cases.twins() if t.spread is not None]
     assert {(row["name"], row["materials"]) for row in rows} == {
-        (f"{p} vs {b}", n) for p, b in catalog.BENCH_MATERIAL_PAIRS for n in bench.QUICK.materials}
+        (f"{t.ours['type']} vs {t.builtin['type']}", n) for t in spread
+        for n in bench.QUICK.materials}
+    floors = {f"{t.ours['type']} vs {t.builtin['type']}": t.floor["type"] for t in spread}
     for row in rows:
-        assert row["floor"] == catalog.BENCH_FLOORS[row["name"].split(" vs ")[0]]
+        assert row["floor"] == floors[row["name"]]
         assert row["warm_vs_floor"] > 0 and row["floor_warm_ratio"] > 0
         for side in ("plugin", "builtin", "floor"):
             assert row[f"{side}_peak_mib"] > 10                     # measured by the child
@@ -146,15 +154,16 @@ def test_frozen_passes_replay(results):
 
 def test_kernels_and_tracing_every_pair_and_method(results):
     _, r, _ = results
-    pairs = {name for name, _, _ in catalog.BENCH_BUILTIN}
-    for group, names in (("kernels", pairs), ("tracing", pairs | {catalog.BENCH_TWO_LOBES[0]})):
+    pairs = {t.label for t in cases.twins()}
+    related = {label for label, _, _ in cases.every("related")}
+    for group, names in (("kernels", pairs), ("tracing", pairs | related)):
         rows = r["groups"][group]
         assert {(row["name"], row["method"]) for row in rows} == {
             (n, m) for n in names for m in bench.BSDF_METHODS}
         assert all(row["ratio"] > 0 for row in rows)
     assert all(row["plugin_ops"] > 0 and row["builtin_ops"] > 0 for row in r["groups"]["kernels"])
     tracing = {(row["name"], row["method"]): row for row in r["groups"]["tracing"]}
-    ggx = catalog.BENCH_BUILTIN[0][0]
+    ggx = GGX.label
     sample = tracing[(ggx, "sample")]
     # The path tracer calls sample and eval_pdf; the plugin's sample evaluates
     # its lobes at the sampled direction without calling eval or pdf again, and
@@ -165,7 +174,7 @@ def test_kernels_and_tracing_every_pair_and_method(results):
     # The floor (a bare Python BSDF) beside the pairs that have one, and the
     # Dr.Jit variables every call creates, plugin and built-in alike.
     for (name, method), row in tracing.items():
-        assert ("floor_ms" in row) == (name in catalog.BENCH_TRACING_FLOORS)
+        assert ("floor_ms" in row) == (name in {t.label for t in cases.twins() if t.floor})
         assert row["plugin_vars"] > 0 and row["builtin_vars"] > 0
         if "floor_ms" in row:
             assert row["floor_ms"] > 0 and row["floor_vars"] > 0 and row["ms_vs_floor"] > 0
@@ -176,13 +185,15 @@ def test_energy_compensation_costed_per_model(results):
     import mitsuba as mi
     _, r, _ = results
     rows = {row["name"]: row for row in r["groups"]["energy"]}
-    assert set(rows) == {name for name, _ in catalog.BENCH_ENERGY}
-    assert {config["type"] for _, config in catalog.BENCH_ENERGY} == {
+    energy = cases.every("energy")
+    assert set(rows) == {name for name, _ in energy}
+    assert {config["type"] for _, config in energy} == {
         name for name, cls in BY_NAME.items() if cls.compensable}
-    for name, config in catalog.BENCH_ENERGY:
+    for name, config in energy:
         row = rows[name]
         assert row["on_s"] > 0 and row["off_s"] > 0
-        spec = mi.load_dict(config).albedo_spec()
+        table = getattr(mi.load_dict(config).compensation(), "table", None)
+        spec = next(t for t in table.specs if isinstance(t, AlbedoSpec)) if table else None
         if spec is None:                              # EON: analytic albedo
             assert row["table"] == "(analytic)" and row["table_build_s"] == 0
         else:
@@ -221,7 +232,8 @@ def test_peak_memory_is_the_workers_own():
     memory, not its parent's (ru_maxrss inherits the parent's at fork: a full
     bench run once reported 397 MiB for every kind and count)."""
     ballast = np.ones(64 * 1024 * 1024 // 8 * 8)          # 512 MiB resident in this process
-    own = bench.in_subprocess("materials", kind="diffuse", n=1, res=8, spp=1, repeats=1)
+    own = bench.in_subprocess("materials", twin="lambert vs diffuse", side="builtin", n=1,
+                              res=8, spp=1, repeats=1)
     assert ballast.sum() > 0 and own["peak_mib"] < 400, own["peak_mib"]
 
 
@@ -355,6 +367,6 @@ def test_plugin_code_is_told_by_place_not_by_name(tmp_path):
 
 
 def test_calls_by_mitsuba_are_counted_in_a_render():
-    counts = anatomy.calls_in_a_render(catalog.BENCH_BUILTIN[0][1])
+    counts = anatomy.calls_in_a_render(GGX.ours)
     assert counts["sample"][0] >= 1 and counts["eval_pdf"][0] >= 1
     assert counts["sample"][1] == counts["sample"][0]      # sample calls no other method

@@ -51,3 +51,15 @@ def test_a_table_that_cannot_converge_fails(tmp_path, monkeypatch):
     capped = chi2_of(ConvergedChiSquareTest, TOON_BAND, TOON_BAND, max_ires=33)
     assert not capped.run(0.01, quiet=True)
     assert capped.unconverged > 0 and "did not converge" in capped.messages
+
+
+@pytest.mark.parametrize("scale, message", [(2.0, "more than 1"), (-1.0, "negative")])
+def test_a_density_that_is_no_density_fails(tmp_path, monkeypatch, scale, message):
+    """lambert's pdf doubled (it integrates to 2) or negated: the table itself
+    is refused, with the reason."""
+    monkeypatch.chdir(tmp_path)
+    chi2 = chi2_of(ConvergedChiSquareTest, {"type": "lambert"}, {"type": "lambert"})
+    pdf = chi2.pdf_func
+    chi2.pdf_func = lambda *args: scale * pdf(*args)
+    assert not chi2.run(0.01, quiet=True)
+    assert "Failure: the density integrates to" in chi2.messages and message in chi2.messages

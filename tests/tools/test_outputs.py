@@ -191,3 +191,41 @@ def test_a_report_with_subfolders_is_replaced_and_nothing_else_goes(tmp_path):
     bad.mkdir()
     (bad / outputs.MARKER).write_text(json.dumps({"command": "x", "files": ["../outside.txt"]}))
     assert outputs.previous_report(str(bad)) is None
+
+
+@pytest.mark.parametrize("spelling", ["elink", "elink/", "elink//", "./elink/"])
+def test_a_link_is_refused_however_it_is_spelled(renders, tmp_path, spelling):
+    """A symbolic link to an empty folder, with or without trailing slashes,
+    relative: refused before any work (the report is not computed first)."""
+    target = tmp_path / "empty"
+    target.mkdir()
+    (tmp_path / "elink").symlink_to(target)
+    before = snapshot(tmp_path)
+    out = run("compare", str(renders / "ref.exr"), str(renders / "test.exr"), "-o", spelling,
+              cwd=tmp_path)
+    assert "is a symbolic link" in one_line_error(out, "compare")
+    assert snapshot(tmp_path) == before and not list(target.iterdir())
+
+
+@pytest.mark.parametrize("spelling", ["fresh/", "./fresh//", "sub/../fresh/"])
+def test_a_new_folder_with_a_trailing_slash_takes_the_report(renders, tmp_path, spelling):
+    (tmp_path / "sub").mkdir()
+    out = run("compare", str(renders / "ref.exr"), str(renders / "test.exr"), "-o", spelling,
+              cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    assert (tmp_path / "fresh" / "index.html").is_file()
+
+
+@pytest.mark.parametrize("spelling, why", [(".", "holds the input"), ("sub/..", "holds the input"),
+                                           ("sub/../", "holds the input"),
+                                           ("sub/.", "is a folder holding other files")])
+def test_a_path_ending_in_dots_is_the_folder_it_names(renders, tmp_path, spelling, why):
+    """``.`` and ``sub/..`` are the current folder, which holds the inputs;
+    ``sub/.`` is ``sub``, which holds a user's file: each is refused as such."""
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "sub" / "plan.txt").write_text("mine")
+    before = snapshot(tmp_path)
+    out = run("compare", str(renders / "ref.exr"), str(renders / "test.exr"), "-o", spelling,
+              cwd=tmp_path)
+    assert why in one_line_error(out, "compare")
+    assert snapshot(tmp_path) == before

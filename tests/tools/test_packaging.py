@@ -79,6 +79,21 @@ def test_wheel_contents(wheel):
     assert any("extra == \"reports\"" in r and "scipy" in r for r in requires)
 
 
+def test_building_leaves_nothing_git_would_show(wheel):
+    """What pip leaves in the source folder while building (build/, the
+    egg-info) is ignored by the checkout's .gitignore: a user's git status
+    stays clean after pip install ."""
+    src = wheel.parent.parent / "src"
+    tracked = {name.split("/")[0] for name in subprocess.run(
+        ["git", "-C", str(ROOT), "ls-files"], capture_output=True, text=True).stdout.split()}
+    left = sorted(set(os.listdir(src)) - tracked)
+    assert "build" in left                    # (what this test is about is there)
+    run(["git", "-C", str(src), "init", "-q"])
+    for name in left:
+        ignored = subprocess.run(["git", "-C", str(src), "check-ignore", "-q", name])
+        assert ignored.returncode == 0, f"{name} would show in git status"
+
+
 @pytest.fixture(scope="module")
 def installed(wheel, tmp_path_factory):
     """A fresh virtual environment with the wheel (no report extras): its

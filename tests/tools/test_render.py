@@ -116,6 +116,8 @@ BAD_NUMBERS = {
     "-t 0": (["-t", "0"], "argument -t/--threads: invalid value 0"),
     "-m nope": (["-m", "nope"], "-m nope is not a Mitsuba variant here; valid: scalar_rgb"),
     "-o x.tiff": (["-o", "x.tiff"], "-o x.tiff: unknown extension '.tiff'"),
+    "-D mode=foo": (["-D", "mode=foo"], "-D mode=foo is invalid for the bundled scene "
+                                        "lambert; valid: scanline, hdr"),
 }
 
 
@@ -179,8 +181,10 @@ def test_progress_in_a_pipe_is_plain_lines(tmp_path):
     assert out.returncode == 0, out.stderr
     assert "\r" not in out.stderr
     lines = out.stderr.strip().splitlines()
-    assert len(lines) == 4 and lines[-1].startswith("mi-brdfs render: 4/4 spp")
-    assert "ETA ?" in lines[0]                  # no estimate from the compiling pass alone
+    assert len(lines) == 5 and lines[-1].startswith("mi-brdfs render: 4/4 spp")
+    assert lines[0] == ("mi-brdfs render: 0/4 spp, first pass (it also traces and compiles "
+                        "the kernels)")              # progress shows from the start
+    assert "ETA ?" in lines[1]                  # no estimate from the compiling pass alone
     quiet = run("render", "lambert", "-D", "res=8", "--spp", "4", "-q", "-o", str(tmp_path / "y.exr"))
     assert quiet.returncode == 0 and quiet.stderr == ""
 
@@ -219,3 +223,14 @@ def test_progress_bar_on_a_terminal_lines_elsewhere(tty):
     else:
         assert "\r" not in stream.text and len(stream.text.splitlines()) == 4
         assert stream.text.splitlines()[1].endswith("ETA 1.0 s")     # 4 spp left at 4 spp/s
+
+
+def test_help_says_what_the_command_is_whole():
+    """The description is a whole sentence (not a docstring's first line cut
+    off), and the command works with docstrings stripped (python -OO)."""
+    out = subprocess.run([sys.executable, "-OO", "-m", "mi_brdfs", "--help"], capture_output=True,
+                         text=True)
+    assert out.returncode == 0, out.stderr
+    text = " ".join(out.stdout.split())
+    assert cli.DESCRIPTION in text
+    assert text.count(cli.DESCRIPTION.split(": ")[0]) == 1

@@ -11,7 +11,9 @@ import numpy as np
 import pytest
 
 from mi_brdfs.bsdfs import BY_NAME
-from mi_brdfs.tools import catalog, cli, groundtruth, validate
+from mi_brdfs.bsdfs import cases
+from mi_brdfs.tools import cli, groundtruth, validate
+from mi_brdfs.tools.validate import sections
 
 
 @pytest.fixture(scope="module")
@@ -58,7 +60,7 @@ def test_furnace_flags(report):
 
 def test_furnace_shows_compensated_beside_uncompensated(report):
     """Every configuration of a compensable model has its compensated curve on
-    the same plot; where the catalog promises albedo 1 it is 1 within 1 % up to
+    the same plot; where a model's cases promise albedo 1 it is 1 within 1 % up to
     85° (a check that can fail: see test_compensation_check_fails_off_one), and
     compensation only ever adds light, never above 1 (EON, Oren-Nayar's
     compensated form, also removes the lecture model's excess above 1)."""
@@ -69,11 +71,11 @@ def test_furnace_shows_compensated_beside_uncompensated(report):
     promised = set()
     for model, config in configs:
         rows = {f["mode"]: f for f in r["furnace"] if (f["model"], f["config"]) == (model, config)}
-        expected = {"hdr", "scanline"} | ({validate.COMPENSATED} if model in compensable else set())
+        expected = {"hdr", "scanline"} | ({sections.COMPENSATED} if model in compensable else set())
         assert set(rows) == expected, (model, config)
         assert len({f["plot"] for f in rows.values()}) == 1             # one plot, side by side
         if model in compensable:
-            comp, hdr = rows[validate.COMPENSATED], rows["hdr"]
+            comp, hdr = rows[sections.COMPENSATED], rows["hdr"]
             lost = np.minimum(np.array(hdr["quadrature"]), 1.0)
             assert np.all(np.array(comp["quadrature"]) >= lost - 1e-3), (model, config)
             assert comp["max"] <= 1.005, (model, config)
@@ -92,7 +94,7 @@ def test_sampling_passes(report):
     lambert = [s for s in r["sampling"] if s["model"] == "lambert"]
     assert all(s["weight_variance"] < 1e-10 for s in lambert)     # perfect importance sampling
     assert all(n["rejected"] for n in r["negative"])               # and it sees a wrong pdf
-    assert {n["model"] for n in r["negative"]} == set(catalog.NEGATIVE)
+    assert {n["model"] for n in r["negative"]} == set(cases.negative_controls())
 
 
 def test_quick_samples_every_model_at_representative_parameters(report):
@@ -113,9 +115,9 @@ def test_exact_fresnel_makes_cook_torrance_roughplastic(report):
     corrected by the exact dielectric term it vanishes to float precision;
     with Schlick's F it is visible."""
     _, r = report
-    assert len(r["fresnel"]) == len(validate.FRESNEL_ALPHAS)
+    assert len(r["fresnel"]) == len(sections.FRESNEL_ALPHAS)
     for row in r["fresnel"]:
-        assert row["corrected"] <= validate.FLOAT_PRECISION and row["schlick"] > 0.03, row
+        assert row["corrected"] <= sections.FLOAT_PRECISION and row["schlick"] > 0.03, row
     status = {c["id"]: c["status"] for c in r["checks"]}
     assert all(status[f"equivalence/{row['id']}"] == "pass" for row in r["fresnel"])
     assert status["equivalence/cook_torrance-roughplastic"] == "documented"
@@ -123,10 +125,10 @@ def test_exact_fresnel_makes_cook_torrance_roughplastic(report):
 
 def test_exact_fresnel_check_sees_a_wrong_index(monkeypatch):
     """The check can fail: the Fresnel term at η = 1.45 where roughplastic has 1.5."""
-    exact = validate.fresnel_dielectric
-    monkeypatch.setattr(validate, "fresnel_dielectric", lambda cos_i, eta: exact(cos_i, 1.45))
+    exact = sections.fresnel_dielectric
+    monkeypatch.setattr(sections, "fresnel_dielectric", lambda cos_i, eta: exact(cos_i, 1.45))
     rows = validate.fresnel_section()
-    assert all(row["corrected"] > 100 * validate.FLOAT_PRECISION for row in rows)
+    assert all(row["corrected"] > 100 * sections.FLOAT_PRECISION for row in rows)
     assert {c["status"] for c in validate.checks({"fresnel": rows})} == {"fail"}
 
 
@@ -241,11 +243,11 @@ def test_a_documented_limitation_does_not_fail_validate(tmp_path, monkeypatch):
 
 @pytest.mark.parametrize("deviation, status", [(0.004, "pass"), (0.02, "fail")])
 def test_compensation_check_fails_off_one(deviation, status):
-    row = {"model": "ward", "config": "c", "mode": validate.COMPENSATED, "promised": True,
+    row = {"model": "ward", "config": "c", "mode": sections.COMPENSATED, "promised": True,
            "deviation": deviation, "max": 1.0, "max_at": 0, "exceeds_1": False,
            "render_vs_quadrature": 0.0}
     energy = validate.checks({"furnace": [row]})[0]
-    assert energy["id"] == f"furnace/ward/c/{validate.COMPENSATED}/energy"
+    assert energy["id"] == f"furnace/ward/c/{sections.COMPENSATED}/energy"
     assert energy["status"] == status and f"{deviation:.4f}" in energy["measured"]
 
 
@@ -276,15 +278,15 @@ def test_polar_lobe_tick_labels_do_not_collide():
 @pytest.mark.slow
 def test_the_full_reports_chi2_passes_and_rejects_its_negative_controls():
     """The χ² part of the full report (not its renders): every test of the
-    catalog passes at the report's sample count, with the density integrated
+    models' cases passes at the report's sample count, with the density integrated
     until it converges, and every negative control is rejected."""
-    tests = catalog.report_chi2()
-    count = validate.chi2_count(tests, catalog.NEGATIVE)
+    tests = cases.report_chi2()
+    count = validate.chi2_count(tests, cases.negative_controls())
     size = dataclasses.replace(validate.FULL, weight_samples=1000)    # χ² as in the report
     rows = validate.sampling_section(size, tests, count)
-    assert len(rows) == sum(len(c.thetas) for e in catalog.ENTRIES.values() for c in e.chi2)
+    assert len(rows) == sum(len(c.thetas) for e in cases.ALL.values() for c in e.chi2)
     failed = [(r["model"], r["config"], r["theta"], r["p_value"], r["unconverged"])
               for r in rows if not r["passed"]]
     assert not failed
-    negative = validate.negative_section(validate.FULL, catalog.NEGATIVE, count)
+    negative = validate.negative_section(validate.FULL, cases.negative_controls(), count)
     assert len(negative) == 5 and all(n["rejected"] for n in negative), negative

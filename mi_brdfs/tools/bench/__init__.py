@@ -4,8 +4,9 @@ Timings are medians of repeated renders after a warm-up render, all in one
 process so that ratios are meaningful on a noisy machine — except where the
 number of BSDF instances alive matters (Dr.Jit traces every live instance at
 every render): those groups measure in fresh processes. Errors are relative
-MSE against converged references cached on disk. Every configuration comes
-from the catalog (:mod:`mi_brdfs.tools.catalog`, ``BENCH_*``).
+MSE against converged references cached on disk. Every model's configuration
+comes from the model's own cases (:mod:`mi_brdfs.bsdfs.cases`); the scenes
+are the bench's (:mod:`.measure`, :mod:`.groups`).
 
 The package, by concern:
 

@@ -1,6 +1,7 @@
 """The bench's groups: each a function of the settings and the reference cache
 returning its rows (a list of flat dicts), its configurations from the
-catalog (``catalog.BENCH_*``, :func:`catalog.bench_models`).
+models' own cases (:mod:`mi_brdfs.bsdfs.cases`: each model declares what the bench runs of it) and the
+bench's scenes (:mod:`.measure`).
 
 :data:`GROUPS`, at the end, is the one place a group is added: its runner
 (here), its finding (report.py) and its plots (plots.py), the last two
@@ -17,7 +18,7 @@ from typing import Callable
 
 import numpy as np
 
-from .. import catalog
+from ...bsdfs import cases
 from . import plots, report
 from .measure import (FULL, References, Settings, alternating, efficiency, image, relmse,
                       scene_dict, timed)
@@ -28,13 +29,27 @@ from .workers import in_subprocess
 #  In this process
 # ----------------------------------------------------------------------------
 
+# The glossy sphere the integrators and convergence groups render, and the
+# integrator of their converged reference.
+GLOSSY = {"type": "cook_torrance", "distribution": "ggx", "alpha": 0.3, "k": 0.5}
+REFERENCE_INTEGRATOR = {"type": "path", "max_depth": 16}
+INTEGRATORS: list[tuple[str, dict]] = [
+    ("scanline", {"type": "scanline", "clamp": False, "shadows": True}),
+    ("direct", {"type": "direct"}),
+    ("path depth 2", {"type": "path", "max_depth": 2}),
+    ("path depth 3", {"type": "path", "max_depth": 3}),
+    ("path depth 8", {"type": "path", "max_depth": 8}),
+]
+# Scan-line cost against resolution and number of lights: (BSDF, integrator).
+SCALING = ({"type": "lambert", "mode": "scanline"}, {"type": "scanline"})
+
 def builtin(s: Settings, refs: References) -> list[dict]:
     """Python plugin vs Mitsuba's C++ built-in, the same BSDF, scene and spp: the
     time ratio, and where the time goes (Python tracing, LLVM codegen, kernel
     execution, from Dr.Jit's kernel history)."""
     import mitsuba as mi
     rows = []
-    for name, ours, builtin in catalog.BENCH_BUILTIN:
+    for name, ours, builtin in ((t.label, t.ours, t.builtin) for t in cases.twins()):
         t_ours = timed(mi.load_dict(scene_dict(ours, s.res)), s.spp, s.repeats)
         t_builtin = timed(mi.load_dict(scene_dict(builtin, s.res)), s.spp, s.repeats)
         row = {"name": name, "plugin_s": t_ours["median_s"], "builtin_s": t_builtin["median_s"],
@@ -47,11 +62,11 @@ def builtin(s: Settings, refs: References) -> list[dict]:
 
 
 def models(s: Settings, refs: References) -> list[dict]:
-    """Render time per spp of every model and variant (catalog.bench_models),
+    """Render time per spp of every model and variant (each model's cases().costs),
     relative to lambert."""
     import mitsuba as mi
     rows = []
-    for name, config in catalog.bench_models():
+    for name, config in cases.costs():
         t = timed(mi.load_dict(scene_dict(config, s.res)), s.spp, s.repeats)
         rows.append({"name": name, "median_s": t["median_s"], "per_spp_s": t["median_s"] / s.spp,
                      "compile_s": t["compile_s"]})
@@ -65,7 +80,7 @@ def oren_nayar(s: Settings, refs: References) -> list[dict]:
     """The Oren-Nayar table at several resolutions vs the exact formulas: time
     and error against the exact render (same seed: no noise)."""
     import mitsuba as mi
-    base = catalog.BENCH_OREN_NAYAR
+    _, base = cases.of("oren_nayar").variants[0]
     exact_scene = mi.load_dict(scene_dict({**base, "method": "exact"}, s.res))
     exact = timed(exact_scene, s.spp, s.repeats)
     exact_img = image(exact_scene, s.spp, seed=99)
@@ -90,7 +105,7 @@ def sampling(s: Settings, refs: References) -> list[dict]:
     spp and efficiency."""
     import mitsuba as mi
     rows = []
-    for name, config, strategies in catalog.BENCH_SAMPLING:
+    for name, config, strategies in cases.every("sampling"):
         reference = refs.get(scene_dict({**config, **strategies[0][1]}, s.res))
         for label, options in strategies:
             scene = mi.load_dict(scene_dict({**config, **options}, s.res))
@@ -109,10 +124,10 @@ def integrators(s: Settings, refs: References) -> list[dict]:
     """Scan-line direct lighting, Mitsuba's ``direct``, ``path`` with max depth
     2, 3 and 8, against a converged path-traced reference."""
     import mitsuba as mi
-    bsdf = catalog.BENCH_GLOSSY
-    reference = refs.get(scene_dict(bsdf, s.res, catalog.BENCH_REFERENCE_INTEGRATOR))
+    bsdf = GLOSSY
+    reference = refs.get(scene_dict(bsdf, s.res, REFERENCE_INTEGRATOR))
     rows = []
-    for name, integrator in catalog.BENCH_INTEGRATORS:
+    for name, integrator in INTEGRATORS:
         scene = mi.load_dict(scene_dict(bsdf, s.res, integrator))
         t = timed(scene, s.spp, s.repeats)
         err = relmse(image(scene, s.spp, seed=5), reference)
@@ -124,7 +139,7 @@ def integrators(s: Settings, refs: References) -> list[dict]:
 def convergence(s: Settings, refs: References) -> list[dict]:
     """Error vs spp (log-log) and its slope (about -1 for relMSE)."""
     import mitsuba as mi
-    d = scene_dict(catalog.BENCH_GLOSSY, s.res)
+    d = scene_dict(GLOSSY, s.res)
     reference = refs.get(d)
     scene = mi.load_dict(d)
     rows = []
@@ -142,7 +157,7 @@ def convergence(s: Settings, refs: References) -> list[dict]:
 def scaling(s: Settings, refs: References) -> list[dict]:
     """Render time vs resolution and vs number of lights (scan-line)."""
     import mitsuba as mi
-    bsdf, integrator = catalog.BENCH_SCALING
+    bsdf, integrator = SCALING
     rows = []
     for res in s.resolutions:
         t = timed(mi.load_dict(scene_dict(bsdf, res, integrator)), s.spp, s.repeats)
@@ -158,7 +173,7 @@ def lobes(s: Settings, refs: References) -> list[dict]:
     renders at the cost of the model without that lobe."""
     import mitsuba as mi
     rows = []
-    for name, off, reference in catalog.BENCH_LOBES_OFF:
+    for name, off, reference in cases.every("lobes_off"):
         flags = mi.load_dict(off).flags()
         t_off = timed(mi.load_dict(scene_dict(off, s.res)), s.spp, s.repeats)
         t_ref = timed(mi.load_dict(scene_dict(reference, s.res)), s.spp, s.repeats)
@@ -177,18 +192,22 @@ def energy(s: Settings, refs: References) -> list[dict]:
     build its albedo table (as python -m mi_brdfs.tools.tables does)."""
     import mitsuba as mi
 
-    from ...bsdfs import energy as tables
+    from ...bsdfs.compensation import AlbedoSpec
+    from ..tables import build
     built: dict[str, float] = {}
     rows = []
-    for name, config in catalog.BENCH_ENERGY:
+    for name, config in cases.every("energy"):
         t = alternating({"off": mi.load_dict(scene_dict(config, s.res)),
                          "on": mi.load_dict(scene_dict({**config, "energy_compensation": True},
                                                        s.res))}, s.spp, s.repeats)
         t_off, t_on = t["off"], t["on"]
-        spec = mi.load_dict(config).albedo_spec()
+        # the single-scattering table the compensation is made from (none: analytic)
+        table = getattr(mi.load_dict(config).compensation(), "table", None)
+        spec = next((t for t in table.specs if isinstance(t, AlbedoSpec)), None) if table \
+            else None
         if spec is not None and spec.name not in built:
             start = time.perf_counter()
-            tables.build(spec, s.table_samples)
+            build(spec, s.table_samples)
             built[spec.name] = time.perf_counter() - start
         rows.append({"name": name, "off_s": t_off["median_s"], "on_s": t_on["median_s"],
                      "ratio": t_on["median_s"] / t_off["median_s"],
@@ -204,6 +223,21 @@ def energy(s: Settings, refs: References) -> list[dict]:
 #  In processes of their own (workers.py)
 # ----------------------------------------------------------------------------
 
+def explore(s: Settings, refs: References) -> list[dict]:
+    """mi-brdfs explore as its page sees it (a server process, one websocket
+    client; tools/explore/latency.py): start-up, a configuration's first
+    128² image, slider -> plot data (the page's 100 ms budget), re-render to
+    the first pass and to 256 spp after a change, and a fit; medians and
+    maxima over the slider moves."""
+    from ..explore import latency
+    return latency.measure(moves=20 if s is FULL else 3)
+
+
+def explore_finding(rows: list[dict]) -> str:
+    from ..explore import latency
+    return latency.finding(rows)
+
+
 MATERIALS_COLUMNS = {     # column: the worker's figure
     "first_s": "first_wall_s", "first_tracing_s": "first_tracing_s",
     "first_codegen_s": "first_codegen_s", "warm_s": "wall_s", "tracing_s": "tracing_s",
@@ -213,17 +247,17 @@ MATERIALS_COLUMNS = {     # column: the worker's figure
 
 def materials(s: Settings, refs: References) -> list[dict]:
     """N spheres, each with its own material (path depth 3, constant
-    environment), plugin vs built-in (catalog.BENCH_MATERIAL_PAIRS) and the
+    environment), plugin vs built-in (the twins with a spread of materials) and the
     floor beside them: the same BSDF as a bare Python mi.BSDF without the
-    framework (tools/bench/floor.py, catalog.BENCH_FLOORS), what Python itself
+    framework (tools/bench/floor.py, the twins' floors), what Python itself
     costs. First and warm render split into tracing, code generation and kernel
     execution, a frozen render's replay (render/frozen.py), and peak memory;
     each (kind, N) in processes of its own (``rounds`` of them, alternating
     kinds; medians). The first render loads its kernels from Dr.Jit's disk
     cache when an earlier run compiled them."""
     rows = []
-    for plugin, builtin in catalog.BENCH_MATERIAL_PAIRS:
-        floor = catalog.BENCH_FLOORS[plugin]
+    for twin in (t for t in cases.twins() if t.spread is not None):
+        plugin, builtin, floor = twin.ours["type"], twin.builtin["type"], twin.floor["type"]
         kinds = {"plugin": plugin, "builtin": builtin, "floor": floor}
         for n in s.materials:
             # Each (kind, n) in processes of its own, the kinds alternating; the
@@ -231,7 +265,7 @@ def materials(s: Settings, refs: References) -> list[dict]:
             runs: dict[str, list[dict]] = {side: [] for side in kinds}
             for _ in range(s.rounds):
                 for side, kind in kinds.items():
-                    runs[side].append(in_subprocess("materials", kind=kind, n=n,
+                    runs[side].append(in_subprocess("materials", twin=twin.label, side=side, n=n,
                                                     res=s.materials_res, spp=s.materials_spp,
                                                     repeats=s.repeats))
             row = {"name": f"{plugin} vs {builtin}", "materials": n, "floor": floor}
@@ -270,14 +304,14 @@ def frozen(s: Settings, refs: References) -> list[dict]:
 
 def kernels(s: Settings, refs: References) -> list[dict]:
     """eval, pdf, eval_pdf and sample of many direction pairs: kernel execution
-    time, plugin and built-in (catalog.BENCH_BUILTIN) alternating in one
+    time, plugin and built-in (the models' twins) alternating in one
     process, on one thread (stable on shared cores)."""
     return in_subprocess("kernels", lanes=s.kernel_lanes, repeats=s.repeats)["rows"]
 
 
 def tracing(s: Settings, refs: References) -> list[dict]:
     """Tracing time of one call of each method, plugin vs built-in and, where
-    there is one (catalog.BENCH_TRACING_FLOORS), the floor: the same BSDF as a
+    there is one (the twin's floor), the floor: the same BSDF as a
     bare Python mi.BSDF (tools/bench/floor.py); the Dr.Jit variables one call
     creates (from Dr.Jit's trace log); and what the plugin's call does:
     texture evaluations, Mitsuba objects built, BSDF methods it calls again,
@@ -338,5 +372,6 @@ GROUPS: dict[str, Group] = {g.name: g for g in [
     Group("frozen", frozen, report.frozen, plots.frozen),
     Group("kernels", kernels, report.kernels, plots.kernels),
     Group("tracing", tracing, report.tracing, plots.tracing),
+    Group("explore", explore, explore_finding),
     Group("trade", trade, report.trade, writes=True),
 ]}

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..._jit import from_numpy
-from .. import catalog
+from ...bsdfs import cases
 from ..analysis import camera
 
 
@@ -93,6 +93,10 @@ def relmse(test: np.ndarray, ref: np.ndarray) -> float:
 #  Scenes
 # ----------------------------------------------------------------------------
 
+# The floor under the sphere of the in-process groups' scene.
+FLOOR = {"type": "lambert", "reflectance": 0.5}
+
+
 def scene_dict(bsdf: dict, res: int, integrator: dict | None = None, lights: int = 1,
                env: float = 0.3, plane: bool = True) -> dict:
     """A sphere on a plane, point lights and a dim constant environment."""
@@ -106,7 +110,7 @@ def scene_dict(bsdf: dict, res: int, integrator: dict | None = None, lights: int
         "env": {"type": "constant", "radiance": {"type": "rgb", "value": env}},
     }
     if plane:
-        d["plane"] = {"type": "rectangle", "bsdf": dict(catalog.BENCH_FLOOR),
+        d["plane"] = {"type": "rectangle", "bsdf": dict(FLOOR),
                       "to_world": T().translate([0, -1, 0]) @ T().rotate([1, 0, 0], -90)
                       @ T().scale(4)}
     for i in range(lights):
@@ -117,10 +121,14 @@ def scene_dict(bsdf: dict, res: int, integrator: dict | None = None, lights: int
     return d
 
 
-def spheres_scene(kind: str, n: int, res: int, max_depth: int = 3) -> dict:
-    """``n`` unit spheres in a square grid, each with its own ``kind`` material
-    (catalog.BENCH_MATERIALS), in a constant environment, path traced (the full
-    run: 200 spheres, depth 3, 128², 64 spp)."""
+def spheres_scene(twin: str, side: str, n: int, res: int, max_depth: int = 3) -> dict:
+    """``n`` unit spheres in a square grid, each with its own material: the
+    ``side`` ("plugin", "builtin" or "floor") of the model's twin ``twin``
+    (:class:`mi_brdfs.bsdfs.cases.Twin`) with the parameters of its spread at
+    the sphere's place; in a constant environment, path traced (the full run:
+    200 spheres, depth 3, 128², 64 spp)."""
+    t = cases.twin(twin)
+    base = {"plugin": t.ours, "builtin": t.builtin, "floor": t.floor}[side]
     side = math.ceil(math.sqrt(n))
     spacing, fov = 2.5, 40.0
     distance = 1.2 * side * spacing / (2 * math.tan(math.radians(fov / 2))) + 2
@@ -130,7 +138,7 @@ def spheres_scene(kind: str, n: int, res: int, max_depth: int = 3) -> dict:
     for i in range(n):
         x, y = (i % side - (side - 1) / 2) * spacing, (i // side - (side - 1) / 2) * spacing
         d[f"sphere{i}"] = {"type": "sphere", "center": [x, y, 0.0], "radius": 1.0,
-                           "bsdf": catalog.BENCH_MATERIALS[kind](i / max(n - 1, 1))}
+                           "bsdf": {**base, **t.spread(i / max(n - 1, 1))}}
     return d
 
 

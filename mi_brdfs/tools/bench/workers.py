@@ -13,7 +13,7 @@ import json
 import statistics
 import time
 
-from .. import catalog
+from ...bsdfs import cases
 from .anatomy import call_anatomy, calls_in_a_render, variables_created
 from .measure import BSDF_METHODS, bsdf_call, bsdf_inputs, measured, peak_mib, render, spheres_scene
 
@@ -48,8 +48,9 @@ def main(task: str, options: str) -> int:
 #  The tasks
 # ----------------------------------------------------------------------------
 
-def materials(kind: str, n: int, res: int, spp: int, repeats: int) -> dict:
-    """First render of the spheres scene and the medians of ``repeats`` warm
+def materials(twin: str, side: str, n: int, res: int, spp: int, repeats: int) -> dict:
+    """First render of the spheres scene (each sphere the ``side`` of ``twin``:
+    "plugin", "builtin" or "floor") and the medians of ``repeats`` warm
     renders, each split into tracing, code generation and kernel execution (s),
     and the median of ``repeats`` replays of a frozen render."""
     import drjit as dr
@@ -59,7 +60,7 @@ def materials(kind: str, n: int, res: int, spp: int, repeats: int) -> dict:
     start = time.perf_counter()
     # parallel=False as in the CLI: Python plugins loaded in worker threads failed
     # intermittently (bad_alloc).
-    scene = mi.load_dict(spheres_scene(kind, n, res), parallel=False)
+    scene = mi.load_dict(spheres_scene(twin, side, n, res), parallel=False)
     result = {"load_s": time.perf_counter() - start}
     first = measured(lambda: render(scene, spp, seed=0))
     warm = [measured(lambda: render(scene, spp, seed=r + 1)) for r in range(repeats)]
@@ -79,12 +80,14 @@ def materials(kind: str, n: int, res: int, spp: int, repeats: int) -> dict:
 
 
 def passes(n: int, res: int, spp: int, passes: int, freeze: bool, repeats: int) -> dict:
-    """``render_passes`` of the cook_torrance spheres scene: the first call in
-    the process (what ``mi-brdfs render`` does) and the median of the next."""
+    """``render_passes`` of the spheres scene of the first twin with a spread
+    (cook_torrance as roughconductor): the first call in the process (what
+    ``mi-brdfs render`` does) and the median of the next."""
     import mitsuba as mi
 
     from ...render.passes import render_passes
-    scene = mi.load_dict(spheres_scene("cook_torrance", n, res), parallel=False)
+    twin = next(t for t in cases.twins() if t.spread is not None)
+    scene = mi.load_dict(spheres_scene(twin.label, "plugin", n, res), parallel=False)
     messages: list[str] = []
     times = []
     for r in range(repeats + 1):
@@ -108,7 +111,7 @@ def kernels(lanes: int, repeats: int) -> dict:
     import mitsuba as mi
     dr.set_thread_count(1)
     x = bsdf_inputs(lanes)
-    pairs = [(name, mi.load_dict(p), mi.load_dict(b)) for name, p, b in catalog.BENCH_BUILTIN]
+    pairs = [(t.label, mi.load_dict(t.ours), mi.load_dict(t.builtin)) for t in cases.twins()]
     samples: dict[tuple, list[dict]] = {}
     for r in range(repeats + 1):                      # round 0 compiles
         for name, plugin, builtin in pairs:
@@ -137,7 +140,8 @@ def tracing(lanes: int, calls: int) -> dict:
     the floor, where there is one), the Dr.Jit variables each call creates, and
     the anatomy of the plugin's call."""
     import mitsuba as mi
-    pairs = [*catalog.BENCH_BUILTIN, catalog.BENCH_TWO_LOBES]
+    pairs = [(t.label, t.ours, t.builtin) for t in cases.twins()] + cases.every("related")
+    floors = {t.label: t.floor for t in cases.twins() if t.floor is not None}
     # First, while no other BSDF is alive: a render traces every live instance.
     in_render = {}
     for name, p, _ in pairs:
@@ -147,8 +151,8 @@ def tracing(lanes: int, calls: int) -> dict:
     rows = []
     for name, p, b in pairs:
         sides = {"plugin": mi.load_dict(p), "builtin": mi.load_dict(b)}
-        if name in catalog.BENCH_TRACING_FLOORS:
-            sides["floor"] = mi.load_dict(catalog.BENCH_TRACING_FLOORS[name])
+        if name in floors:
+            sides["floor"] = mi.load_dict(floors[name])
         for method in BSDF_METHODS:
             row = {"name": name, "method": method}
             times: dict[str, list[float]] = {side: [] for side in sides}

@@ -80,7 +80,7 @@ def _serve(conn, spec, res: int, spp: int) -> None:
             S.render(scene, spp, seed=seed)
             conn.send(("time", time.perf_counter() - start))
     except Exception as error:                 # reported to the parent on one line
-        from ..cli import one_line
+        from ..errors import one_line
         conn.send(("error", one_line(error)))
     finally:
         conn.close()
@@ -231,7 +231,7 @@ def remeasure(report_dir: str, max_targets: int | None = None, settings=None, sh
 
 
 def main(argv: list[str] | None = None) -> int:
-    from ..cli import one_line
+    from ..errors import one_line
     p = argparse.ArgumentParser(prog="python -m mi_brdfs.tools.fit.cost",
                                 description="Measure a fit report's render costs again and "
                                             "compare the intervals (writes nothing).")

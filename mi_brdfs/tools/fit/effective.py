@@ -200,15 +200,21 @@ def describe(found: dict) -> list[str]:
     a = found["anisotropy"]
     if a["present"]:
         out.append(f"it is anisotropic (eval changes by {a['change']:.2f} when both "
-                   "directions turn 90° about the normal); of the course models only ward "
-                   "has anisotropic roughness (fitted below as ward/anisotropic)")
+                   "directions turn 90° about the normal); ward and cook_torrance have "
+                   "anisotropic roughness (fitted below as ward/anisotropic and "
+                   "cook_torrance/ggx/smith/anisotropic)")
     return out
 
 
 def extended_models(found: dict) -> list:
     """The course models' extended configurations worth fitting for the
-    features found: ward with alpha_u and alpha_v for an anisotropic target."""
+    features found: for an anisotropic target, ward and cook_torrance (GGX ×
+    Smith, without energy compensation: it has no anisotropic table) with
+    alpha_u and alpha_v."""
     from .models import Model
     if not found["anisotropy"]["present"]:
         return []
-    return [Model("ward/anisotropic", "ward", (("alpha_u", 0.1), ("alpha_v", 0.1)))]
+    pair = (("alpha_u", 0.1), ("alpha_v", 0.1))
+    return [Model("ward/anisotropic", "ward", pair),
+            Model("cook_torrance/ggx/smith/anisotropic", "cook_torrance",
+                  (("distribution", "ggx"), ("geometry", "smith")) + pair)]

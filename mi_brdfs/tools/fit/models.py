@@ -62,7 +62,7 @@ def all_models() -> list[Model]:
     from ...bsdfs import PLUGINS
     out = []
     for cls in PLUGINS:
-        choices = {o.name: o.choices for o in cls.options()}
+        choices = {o.name: o.choices for o in cls.all_options()}
         names = VARIANTS.get(cls.name, ())
         for combo in itertools.product(*(choices[n] for n in names)):
             base = "/".join((cls.name, *combo))

@@ -125,7 +125,7 @@ def table(results: dict) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     from .. import outputs
-    from ..cli import one_line
+    from ..errors import one_line
     p = argparse.ArgumentParser(prog="python -m mi_brdfs.tools.fit.study",
                                 description="Measure the fit's objectives (see the module).")
     p.add_argument("-o", "--output", required=True, help="report folder: new, empty, or a previous one")

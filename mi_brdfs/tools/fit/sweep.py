@@ -164,7 +164,7 @@ def dask_sweep(client, address: str, tasks: list, settings: Settings, collect,
 # ----------------------------------------------------------------------------
 
 def _line(error: BaseException) -> str:
-    from ..cli import one_line
+    from ..errors import one_line
     return one_line(error)
 
 

@@ -211,7 +211,7 @@ def check(target: Target) -> None:
     and has no delta lobe. Nothing stays alive afterwards."""
     import mitsuba as mi
 
-    from ..cli import one_line
+    from ..errors import one_line
     try:
         bsdf = target.load()
     except TargetError:

@@ -68,7 +68,7 @@ def fit_and_measure(target, model, settings: Settings, pairs=None) -> dict:
     try:
         return _fit_and_measure(target, model, settings, pairs)
     except Exception as error:                     # reported in the record, not lost
-        from ..cli import one_line
+        from ..errors import one_line
         return {"target": target.spec, "model": model.name, "plugin": model.plugin,
                 "error": one_line(error), "traceback": traceback.format_exc(),
                 "worker": worker_name()}

@@ -124,7 +124,7 @@ def answers(records: list[dict], labels: dict[str, str] | None = None) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     """``python -m mi_brdfs.tools.fit.trade -o DIR [--quick] [-j N]``."""
-    from ..cli import one_line
+    from ..errors import one_line
     from .sweep import progress_printer
     p = argparse.ArgumentParser(prog="python -m mi_brdfs.tools.fit.trade",
                                 description="The trade sweep: every course model fitted to "

@@ -1,0 +1,154 @@
+"""``python -m mi_brdfs.tools.groundtruth``: the walk's reference albedos and
+what the compensated plugins differ from it by."""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+
+import numpy as np
+
+from .microsurface import DISTRIBUTIONS, Alpha
+from .report import (compensated_albedo, reference, reference_agreement, residuals,
+                     slice_difference)
+from .walk import albedo
+
+PROG = "python -m mi_brdfs.tools.groundtruth"
+ANISOTROPIC = ((0.05, 0.3), (0.3, 0.05), (0.1, 1.0))      # (α_x, α_y) printed by --anisotropic
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog=PROG, description=main.__doc__)
+    parser.add_argument("-o", "--output", help="write the reference albedos (JSON) here")
+    parser.add_argument("--reference", help="read them from here (instead of walking)")
+    parser.add_argument("--paths", type=int, default=100_000, help="paths per point")
+    parser.add_argument("--residuals", action="store_true",
+                        help="print the compensated models' residuals against the walk")
+    parser.add_argument("--agreement", action="store_true",
+                        help="walk the reference points again (another seed) and print how "
+                             "far the --reference values are, in standard errors")
+    parser.add_argument("--slices", action="store_true",
+                        help="print how far BRDF slices are from the walk's (relative L1)")
+    parser.add_argument("--decomposition", action="store_true",
+                        help="print what single scattering misses: the separable E_ss, the "
+                             "height-correlated first bounce E_1 and the bounces k >= 2")
+    parser.add_argument("--anisotropic", action="store_true",
+                        help="print the walk's albedo for anisotropic roughness "
+                             f"(alpha_x, alpha_y) in {list(ANISOTROPIC)}, F0 1 and 0.5, "
+                             "along (phi 0) and across (phi 90) the tangent")
+    return parser
+
+
+def print_decomposition(paths: int) -> None:
+    print("distribution, alpha, theta_i, F0: E_ss (separable, the plugin) | E_1 "
+          "(height-correlated, the walk's first bounce) | k >= 2 | W (the walk)")
+    thetas = (0, 60, 85)
+    mus = np.cos(np.radians(thetas))
+    for distribution in DISTRIBUTIONS:
+        for alpha in (0.3, 0.6, 1.0):
+            w = albedo(distribution, mus, alpha, (1.0, 0.5), paths, seed=11)
+            e1 = albedo(distribution, mus, alpha, (1.0, 0.5), paths, seed=11, orders=(1, 1))
+            for j, f0 in enumerate((1.0, 0.5)):
+                ess = compensated_albedo({"type": "cook_torrance", "distribution": distribution,
+                                          "geometry": "smith", "alpha": alpha, "k": 0.0,
+                                          "f0": f0, "specular_reflectance": 1.0}, thetas)
+                for k, theta in enumerate(thetas):
+                    print(f"{distribution}, {alpha}, {theta}, {f0}: {ess[k]:.3f} | "
+                          f"{e1[k, j]:.3f} | {w[k, j] - e1[k, j]:.3f} | {w[k, j]:.3f}")
+
+
+def print_slices() -> None:
+    for geometry in ("smith", "cook_torrance"):
+        for distribution in ("ggx", "beckmann", "blinn"):
+            for alpha in (0.3, 0.6, 1.0):
+                for theta in (30, 60):
+                    comp, single = slice_difference(distribution, geometry, alpha, theta, 0.6)
+                    print(f"{distribution}/{geometry}, alpha {alpha}, F0 0.6, theta_i {theta} "
+                          f"deg: plane-of-incidence slice vs the walk, relative L1: "
+                          f"compensated {100 * comp:.1f} %, single scattering {100 * single:.1f} %")
+
+
+def print_anisotropic(paths: int) -> None:
+    thetas, phis, f0s = (0, 45, 85), (0, 90), (1.0, 0.5)
+    print(f"walk albedo W (+- standard error), {paths} paths per point; phi from the "
+          "tangent s (alpha_x along s)")
+    for distribution in DISTRIBUTIONS:
+        for ax, ay in ANISOTROPIC:
+            t, p = (a.ravel() for a in np.meshgrid(thetas, phis, indexing="ij"))
+            w, err = albedo(distribution, np.cos(np.radians(t)), Alpha(ax, ay), f0s, paths,
+                            seed=28, phi=np.radians(p), error=True)
+            for k in range(len(t)):
+                print(f"{distribution}, alpha ({ax}, {ay}), theta {t[k]}, phi {p[k]}: "
+                      f"F0 1: {w[k, 0]:.6f}, F0 0.5: {w[k, 1]:.4f} +- {err[k, 1]:.4f}")
+
+
+def print_residuals(ref: dict) -> None:
+    for distribution in ("ggx", "beckmann", "blinn"):
+        for geometry in ("smith", "cook_torrance"):
+            r = residuals(ref, distribution, geometry)
+            alpha, f0, theta, e, w = r["at"]
+            print(f"{distribution}/{geometry}: alpha <= 1, F0 in [0, 1], 0-85 deg: largest "
+                  f"relative difference {100 * r['relative']:.1f} % (walk >= 0.01; at alpha "
+                  f"{alpha}, F0 {f0}, {theta} deg: {e:.4f} vs {w:.4f}), largest absolute "
+                  f"{r['absolute']:.4f}")
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Write the walk's reference albedos (-o), print the residual of every
+    compensated cook_torrance D x G against them (--residuals), or what the
+    other options name."""
+    from ..outputs import OutputError, check_output_file
+
+    parser = _parser()
+    args = parser.parse_args(argv)
+    log = lambda text: print(text, file=sys.stderr)
+    if not (args.output or args.residuals or args.agreement or args.slices
+            or args.decomposition or args.anisotropic):
+        parser.error("nothing to do: give -o FILE, --residuals, --agreement, --slices, "
+                     "--decomposition or --anisotropic")
+    if args.paths < 2:
+        parser.error(f"--paths {args.paths}: at least 2 paths per point")
+    if args.agreement and not args.reference:
+        parser.error("--agreement compares with the values of --reference FILE; give it")
+    ref = None
+    if args.reference:
+        try:
+            with open(args.reference) as f:
+                ref = json.load(f)
+        except (OSError, ValueError) as error:
+            parser.error(f"--reference {args.reference}: cannot read it "
+                         f"({getattr(error, 'strerror', None) or error})")
+    if args.output:
+        try:
+            check_output_file(args.output)
+        except OutputError as error:
+            parser.error(str(error))
+    if args.decomposition or args.slices or args.residuals:
+        import mi_brdfs  # noqa: F401  (variant, plugins)
+    if args.decomposition:
+        print_decomposition(args.paths)
+    if args.slices:
+        print_slices()
+    if args.anisotropic:
+        print_anisotropic(args.paths)
+    if args.agreement:
+        for distribution, a in reference_agreement(ref, args.paths, log=log).items():
+            print(f"{distribution}: {a['points']} points, {args.paths} paths (seed "
+                  f"{a['seed']}) against {ref['paths']}: largest |difference| "
+                  f"{a['largest']:.1e} = {a['largest_z']:.2f} standard errors; "
+                  f"largest in standard errors {a['worst_z']:.2f}; rms {a['rms_z']:.2f}")
+    if not (args.output or args.residuals):
+        return 0
+    if ref is None:
+        ref = reference(args.paths, log)
+    if args.output:
+        tmp = args.output + ".tmp"
+        with open(tmp, "w") as f:
+            json.dump(ref, f, indent=None, separators=(",", ":"))
+            f.write("\n")
+        os.replace(tmp, args.output)
+        log(f"wrote {args.output}")
+    if args.residuals:
+        print_residuals(ref)
+    return 0

@@ -1,0 +1,107 @@
+"""Regenerate what the repository keeps that is made from the models' modules
+(in a checkout of the repository: it writes its README and docs):
+
+    python -m mi_brdfs.tools.regenerate            # all of it
+    python -m mi_brdfs.tools.regenerate --check    # say what is out of date, change nothing
+
+1. the albedo tables a model declares (its ``tables()``) that the shipped
+   file lacks or holds with other axes (``python -m mi_brdfs.tools.tables
+   --only ...``; the tables already there are kept: rebuild one on purpose
+   with that command);
+2. the README's table of plugins, between its ``<!-- plugins -->`` markers,
+   from each module's title line and its cases' ``checked``;
+3. the committed validation report (``mi-brdfs validate -o docs/validation``),
+   where every model's χ², furnace, negative control and lobe plot come from
+   its cases.
+
+Everything else is derived when it runs: the battery's cases, the bench's
+rows, the fit's models and the plugin pages (the documentation build). Adding
+a model is its module, one line of the registry, its lecture-transcription
+test, and this command (CONTRIBUTING.md).
+"""
+from __future__ import annotations
+
+import argparse
+import inspect
+import os
+import subprocess
+import sys
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+README = os.path.join(ROOT, "README.md")
+BEGIN, END = "<!-- plugins -->", "<!-- /plugins -->"
+
+
+def plugin_table() -> str:
+    """The README's table of plugins: name (linking its module), what it is
+    (its module's title), what it is checked against."""
+    from ..bsdfs import PLUGINS, cases
+    rows = ["| plugin | model | checked against |", "|---|---|---|"]
+    for cls in PLUGINS:
+        module = sys.modules[cls.__module__]
+        title = inspect.getdoc(module).strip().splitlines()[0].split(" — ", 1)[-1]
+        path = os.path.relpath(module.__file__, ROOT)
+        rows.append(f"| [`{cls.name}`]({path}) | {title} | {cases.of(cls.name).checked} |")
+    return "\n".join(rows)
+
+
+def readme_with_table(text: str) -> str:
+    begin, end = text.index(BEGIN) + len(BEGIN), text.index(END)
+    return text[:begin] + "\n" + plugin_table() + "\n" + text[end:]
+
+
+def missing_tables() -> list[str]:
+    """The names of the declared tables the shipped file lacks (or holds with
+    other axes)."""
+    from ..bsdfs import compensation
+    from .tables import specs
+    missing = []
+    for spec in specs():
+        try:
+            compensation.shipped(spec)
+        except compensation.TableError:
+            missing.append(spec.name)
+    return missing
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(
+        prog="python -m mi_brdfs.tools.regenerate",
+        description="Regenerate the tables, the README's plugin table and the validation "
+                    "report from the models' modules.")
+    parser.add_argument("--check", action="store_true",
+                        help="say what is out of date and exit 1 if anything is; change nothing")
+    parser.add_argument("--no-report", action="store_true",
+                        help="leave the validation report (about a minute and a half)")
+    args = parser.parse_args(argv)
+    stale = []
+    tables = missing_tables()
+    if tables:
+        stale.append(f"albedo tables missing: {', '.join(tables)}")
+    with open(README, encoding="utf-8") as f:
+        readme = f.read()
+    if readme_with_table(readme) != readme:
+        stale.append("README.md's plugin table")
+    if args.check:
+        for line in stale:
+            print(f"out of date: {line}")
+        return 1 if stale else 0
+    if tables:
+        subprocess.run([sys.executable, "-m", "mi_brdfs.tools.tables", "--only", *tables],
+                       check=True)
+    if readme_with_table(readme) != readme:
+        from ..render.exr import write_atomically
+
+        def write(tmp: str) -> None:
+            with open(tmp, "w", encoding="utf-8") as f:
+                f.write(readme_with_table(readme))
+        write_atomically(README, write)
+        print("wrote README.md's plugin table")
+    if not args.no_report:
+        subprocess.run([sys.executable, "-m", "mi_brdfs", "validate", "-o",
+                        os.path.join(ROOT, "docs", "validation")], check=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

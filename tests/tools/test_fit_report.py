@@ -1,9 +1,9 @@
 """What mi-brdfs fit tells a user per target (issue 26, points 4 and 6): the
 effective colours and the albedo against independent formulas, the target's
 features no course model has (spectral Fresnel, anisotropy, then fitted by
-anisotropic ward), the report's verdict and explanations, per-channel lobe
-slices, and the smaller checks: black or non-finite targets refused, a
-repeated target fitted once."""
+anisotropic ward and cook_torrance), the report's verdict and explanations,
+per-channel lobe slices, and the smaller checks: black or non-finite targets
+refused, a repeated target fitted once, a partial trade sweep said so."""
 import json
 import math
 
@@ -138,3 +138,21 @@ def test_a_target_with_non_finite_values_is_refused():
     (t,) = targets.parse(["fit_test_not_finite:"])
     with pytest.raises(targets.TargetError, match="its eval is not finite"):
         targets.check(t)
+
+
+def test_a_partial_trade_sweep_says_what_it_left_out(capsys):
+    """trade.md of a run over some materials names the others and the command
+    that runs them all; an unknown material label is refused in one line."""
+    from mi_brdfs.tools.fit import trade
+    assert trade.subset_note(trade.TARGETS) == ""
+    some = [t for t in trade.TARGETS if t[0] in ("diffuse", "Au α0.1")]
+    note = trade.subset_note(some)
+    assert note.startswith(f"**A partial run**: 2 of the {len(trade.TARGETS)} materials")
+    left = note.split("not fitted here: ")[1].split(". The whole sweep")[0].split(", ")
+    assert left == [label for label, _ in trade.TARGETS if label not in ("diffuse", "Au α0.1")]
+    assert "python -m mi_brdfs.tools.fit.trade -o docs/benchmarks/trade" in note
+    with pytest.raises(SystemExit) as exit_:
+        trade.main(["-o", "unused", "--materials", "Au α0.2"])
+    err = capsys.readouterr().err
+    assert exit_.value.code == 1 and len(err.splitlines()) == 1
+    assert "--materials: unknown label 'Au α0.2'" in err

@@ -223,26 +223,26 @@ def _short(v) -> str:
     return str(v)
 
 
+FIT_CSS = """
+table { font-size: 0.8em; }
+td:nth-child(2), td.p { text-align: left; }
+td.p { font-size: 0.85em; max-width: 36em; }
+.verdict { font-weight: bold; }
+.over { color: #b00; }
+.renders { display: flex; flex-wrap: wrap; gap: 6px; }
+figure { text-align: center; font-size: 0.7em; }
+.renders img { height: 96px; }
+img.wide { max-width: 100%; }
+"""
+
+
 def _html(sections: list[str], settings, command: str) -> str:
-    s = settings
+    """The page (the project's shared builder, :mod:`..pages`): the command,
+    how the fits were made and measured, then a section per target."""
+    from .. import pages
     from .scene import VIEWS
-    return f"""<!DOCTYPE html>
-<html><head><meta charset="utf-8"><title>mi-brdfs fit</title>
-<style>
-body {{ font-family: sans-serif; margin: 2em; }}
-table {{ border-collapse: collapse; font-size: 0.8em; margin: 1em 0; }}
-td, th {{ border: 1px solid #ccc; padding: 2px 6px; text-align: right; }}
-td:nth-child(2), td.p {{ text-align: left; }}
-td.p {{ font-size: 0.85em; max-width: 36em; }}
-.verdict {{ font-weight: bold; }}
-.over {{ color: #b00; }}
-.renders {{ display: flex; flex-wrap: wrap; gap: 6px; }}
-figure {{ margin: 0; text-align: center; font-size: 0.7em; }}
-.renders img {{ height: 96px; }}
-img.wide {{ max-width: 100%; }}
-</style></head><body>
-<h1>mi-brdfs fit</h1>
-<p><code>{html.escape(command)}</code></p>
+    s = settings
+    about = f"""<p><code>{html.escape(command)}</code></p>
 <p>Each course model (hdr mode) fitted to each target on the <b>{s.objective}</b>-compressed
 values of the <b>{s.metric}</b> metric's direction pairs ({s.viewers[0]}×{s.viewers[1]} viewers;
 per viewer {s.uniform[0]}×{s.uniform[1]} uniform lights and {s.lobe} mirror-guided ones per
@@ -254,6 +254,5 @@ identical, 1 a black BSDF's. Render cost: the model's time over the target's, ea
 of its own, until the 90 % interval is within {s.cost_tolerance:.0%} (rounds
 {s.cost_rounds[0]}–{s.cost_rounds[1]}); ops: Dr.Jit operations of a traced eval and sample over
 the target's. See <code>docs/guide/fit.md</code>.</p>
-{''.join(sections)}
-</body></html>
 """
+    return pages.page("mi-brdfs fit", about + "".join(sections), css=FIT_CSS)

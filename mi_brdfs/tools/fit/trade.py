@@ -1,7 +1,7 @@
 """The speed/accuracy trade across the course models: ``mi-brdfs fit`` over a
 fixed list of materials (:data:`TARGETS`) and the table "which model for
 which material" (:func:`table`). The bench's ``trade`` group runs it in one
-line, and so does ``python -m mi_brdfs.tools.fit.trade -o DIR [--quick] [-j N]``
+line, and so does ``python -m mi_brdfs.tools.fit.trade -o DIR [--quick] [-j N] [--materials LABEL ...]``
 (the committed ``docs/benchmarks/trade``)::
 
     records = trade.fit_materials(os.path.join(out_dir, "trade"), quick=quick)
@@ -12,7 +12,9 @@ aluminium (spectral indices of refraction, through their RGB response in
 ``llvm_ad_rgb``) at α 0.1 and 0.3 (Beckmann, Mitsuba's default), gold at α
 0.05 and chromium at α 0.15 (GGX), ``roughplastic`` (a red-brown plastic at
 α 0.1 and 0.3, a blue one at α 0.15), ``principled`` as a rough dielectric
-and as a brass-like metal (GGX), and ``diffuse``.
+and as a brass-like metal (GGX), ``diffuse``, and brushed aluminium
+(anisotropic GGX, α 0.05 along the tangent and 0.3 across it; the fit adds
+anisotropic Ward and Cook-Torrance for it).
 """
 from __future__ import annotations
 
@@ -38,6 +40,8 @@ TARGETS = (          # (label, target)
     ("principled dielectric", "principled:base_color=[0.8,0.25,0.1],roughness=0.4,specular=0.5"),
     ("principled metal", "principled:base_color=[0.9,0.75,0.4],roughness=0.25,metallic=1"),
     ("diffuse", "diffuse:reflectance=[0.7,0.5,0.3]"),
+    ("brushed Al α0.05×0.3 GGX",
+     "roughconductor:distribution=ggx,alpha_u=0.05,alpha_v=0.3,material=Al"),
 )
 
 
@@ -52,12 +56,24 @@ def fit_materials(out_dir: str, quick: bool = False, jobs: int | None = None,
 
     def write_table(folder: str, records: list[dict]) -> None:
         with open(os.path.join(folder, "trade.md"), "w") as f:
-            f.write(table(records, labels))
+            f.write(subset_note(targets) + table(records, labels))
 
     jobs = jobs or max(1, min(2, os.cpu_count() or 1))
     return fit([spec for _, spec in targets], out_dir, models, quick=quick, jobs=jobs,
                scheduler=scheduler, show=show, settings=settings,
                command="mi_brdfs.tools.fit.trade.fit_materials", also=write_table)
+
+
+def subset_note(targets) -> str:
+    """A line saying which of :data:`TARGETS` a partial run left out (empty
+    for the whole sweep), and the command that runs them all."""
+    left = [label for label, spec in TARGETS if spec not in {s for _, s in targets}]
+    if not left:
+        return ""
+    return (f"**A partial run**: {len(targets)} of the {len(TARGETS)} materials; not fitted "
+            f"here: {', '.join(left)}. The whole sweep: "
+            "`python -m mi_brdfs.tools.fit.trade -o docs/benchmarks/trade` "
+            "(or `mi-brdfs bench --group trade`).\n\n")
 
 
 def table(records: list[dict], labels: dict[str, str] | None = None) -> str:
@@ -123,7 +139,7 @@ def answers(records: list[dict], labels: dict[str, str] | None = None) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``python -m mi_brdfs.tools.fit.trade -o DIR [--quick] [-j N]``."""
+    """``python -m mi_brdfs.tools.fit.trade -o DIR [--quick] [-j N] [--materials LABEL ...]``."""
     from ..errors import one_line
     from .sweep import progress_printer
     p = argparse.ArgumentParser(prog="python -m mi_brdfs.tools.fit.trade",
@@ -133,10 +149,22 @@ def main(argv: list[str] | None = None) -> int:
                    help="report folder: new, empty, or a previous report")
     p.add_argument("--quick", action="store_true", help="fewer pairs, pixels and timing rounds")
     p.add_argument("-j", "--jobs", type=int, default=None, help="fits at once (default: up to 2)")
+    p.add_argument("--materials", nargs="+", metavar="LABEL", default=None,
+                   help="only these materials, by label (default: all): "
+                        + "; ".join(label for label, _ in TARGETS))
     args = p.parse_args(argv)
+    chosen = TARGETS
+    if args.materials:
+        known = dict(TARGETS)
+        unknown = [m for m in args.materials if m not in known]
+        if unknown:
+            p.exit(1, f"{p.prog}: error: --materials: unknown label {unknown[0]!r}; valid: "
+                      f"{'; '.join(known)}\n")
+        chosen = tuple((m, known[m]) for m in dict.fromkeys(args.materials))
     show = progress_printer(p.prog)
     try:
-        records = fit_materials(args.output, quick=args.quick, jobs=args.jobs, show=show)
+        records = fit_materials(args.output, quick=args.quick, jobs=args.jobs, show=show,
+                                targets=chosen)
     except Exception as error:
         show.close()
         print(f"{p.prog}: error: {one_line(error)}", file=sys.stderr)

@@ -7,9 +7,11 @@
 # light), its BRDF error beside it, and its render cost relative to the
 # material itself, a 90 % interval. Here are the Pareto fronts of the trade
 # sweep (`mi_brdfs.tools.fit.trade`: gold, copper, aluminium and chromium,
-# three plastics, two `principled` settings and `diffuse`) — from the
-# committed results in `docs/benchmarks/trade/` when they exist, else from a
-# small sweep run here (set `MI_BRDFS_RERUN_TRADE=1` to always run one).
+# three plastics, two `principled` settings, `diffuse` and a brushed,
+# anisotropic aluminium) — from the committed results in
+# `docs/benchmarks/trade/` when they exist (its `trade.md` says when that run
+# covered only some of the materials), else from a small sweep run here (set
+# `MI_BRDFS_RERUN_TRADE=1` to always run one).
 
 # %%
 import mi_brdfs  # noqa: F401  (first: it sets up LLVM for drjit)

@@ -53,7 +53,6 @@ map) and ``maps.exr``: every image and error map as one multi-layer EXR
 from __future__ import annotations
 
 import csv
-import html
 import json
 import math
 import os
@@ -63,7 +62,8 @@ from typing import Iterator
 import numpy as np
 
 from ..render import exr, tonemap
-from . import outputs
+from . import measures, outputs, pages
+from .pages import esc
 
 CHANNELS = "RGB"
 THRESHOLDS = {            # option name -> (metric, comparison)
@@ -191,7 +191,7 @@ def _errors(r: np.ndarray, t: np.ndarray, axis, peak: float) -> dict:
     return {
         "mse": mse,
         "rmse": np.sqrt(mse),
-        "relmse": np.mean(d * d / (r + 0.01) ** 2, axis=axis),
+        "relmse": measures.relmse(t, r, axis=axis),
         "mae": np.mean(np.abs(d), axis=axis),
         "smape": np.mean(smape_terms, axis=axis),
         "max_abs": np.max(np.abs(d), axis=axis),
@@ -376,25 +376,18 @@ METRIC_ORDER = ["mse", "rmse", "relmse", "mae", "smape", "max_abs", "psnr", "fli
 
 def _html(ref_path: str, comparisons: list[Comparison], thresholds: dict, operator: str,
           region, flip_mode: str, masked: bool, layer: str | None = None) -> str:
-    esc = html.escape
     css = {"PASS": "pass", "FAIL": "fail", "no thresholds": "none"}
-    rows = []
-    for c in comparisons:
-        cells = "".join(f"<td>{c.metrics[k]:.6g}</td>" for k in METRIC_ORDER)
-        rows.append(f"<tr class='{css[c.verdict]}'><td>{esc(c.test_path)}</td>{cells}"
-                    f"<td>{c.verdict}</td></tr>")
-    header = "".join(f"<th>{k}</th>" for k in METRIC_ORDER)
+    summary = pages.table(["test image", *METRIC_ORDER, "verdict"],
+                          [[c.test_path, *(float(c.metrics[k]) for k in METRIC_ORDER), c.verdict]
+                           for c in comparisons],
+                          classes=[css[c.verdict] for c in comparisons], digits=6)
     limits = ", ".join(f"{THRESHOLDS[k][0]} {THRESHOLDS[k][1]} {v:g}"
                        for k, v in thresholds.items() if v is not None) or "none"
     sections = []
     for c in comparisons:
-        per = "".join(
-            f"<tr><td>{ch}</td>" + "".join(f"<td>{c.metrics['channels'][ch][k]:.6g}</td>"
-                                           for k in METRIC_ORDER[:-1]) + "</tr>"
-            for ch in CHANNELS)
-        figures = "".join(
-            f"<figure><img src='{esc(name)}' alt='{kind}'><figcaption>{kind}</figcaption></figure>"
-            for kind, name in c.files.items())
+        per = pages.table(["channel", *METRIC_ORDER[:-1]],
+                          [[ch, *(float(c.metrics["channels"][ch][k]) for k in METRIC_ORDER[:-1])]
+                           for ch in CHANNELS], digits=6)
         if c.verdict == "no thresholds":
             text = "<p class='none'>No thresholds given: no verdict.</p>"
         elif c.failures:
@@ -404,32 +397,18 @@ def _html(ref_path: str, comparisons: list[Comparison], thresholds: dict, operat
         left_out = (f" {c.metrics['masked_pixels']} non-finite pixels left out."
                     if masked else "")
         sections.append(
-            f"<section><h2>{esc(c.test_path)}</h2>{text}"
-            f"<table><tr><th>channel</th>{''.join(f'<th>{k}</th>' for k in METRIC_ORDER[:-1])}</tr>"
-            f"{per}</table><p>PSNR peak {c.metrics['psnr_peak']:.6g} (overall and every "
-            f"channel).{left_out}</p><div class='figs'>{figures}</div></section>")
+            f"<section><h2>{esc(c.test_path)}</h2>{text}{per}"
+            f"<p>PSNR peak {c.metrics['psnr_peak']:.6g} (overall and every "
+            f"channel).{left_out}</p>"
+            + pages.figures([(name, kind) for kind, name in c.files.items()], cls="wide")
+            + "</section>")
     crop_text = f"crop {','.join(map(str, region))}" if region else "whole image"
     layer_text = f"layer {esc(layer)} of the EXR inputs; " if layer else ""
-    return f"""<!DOCTYPE html>
-<html lang="en"><head><meta charset="utf-8"><title>mi-brdfs compare</title>
-<style>
-body {{ font-family: sans-serif; margin: 2em; }}
-table {{ border-collapse: collapse; margin: 1em 0; }}
-td, th {{ border: 1px solid #ccc; padding: 0.25em 0.6em; text-align: right; }}
-tr.fail td:last-child, p.fail {{ color: #b00; font-weight: bold; }}
-tr.pass td:last-child, p.pass {{ color: #070; }}
-tr.none td:last-child, p.none {{ color: #555; }}
-.figs {{ display: flex; flex-wrap: wrap; gap: 1em; align-items: flex-start; }}
-figure {{ margin: 0; }} figure img {{ width: 360px; }}
-</style></head><body>
-<h1>Comparison against {esc(ref_path)}</h1>
-<p>{layer_text}FLIP mode: {flip_mode.upper()}-FLIP; tone mapping for display: {esc(operator)}; region:
-{crop_text}; thresholds: {esc(limits)}. All images and error maps as layers of one EXR:
-<a href="maps.exr">maps.exr</a>.</p>
-<table><tr><th>test image</th>{header}<th>verdict</th></tr>{''.join(rows)}</table>
-{''.join(sections)}
-</body></html>
-"""
+    body = (f"<p>{layer_text}FLIP mode: {flip_mode.upper()}-FLIP; tone mapping for display: "
+            f"{esc(operator)}; region: {crop_text}; thresholds: {esc(limits)}. All images and "
+            f"error maps as layers of one EXR: <a href=\"maps.exr\">maps.exr</a>.</p>\n"
+            f"{summary}\n{''.join(sections)}")
+    return pages.page(f"Comparison against {ref_path}", body)
 
 
 def _csv_rows(comparisons: list[Comparison]) -> Iterator[list]:

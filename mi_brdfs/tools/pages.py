@@ -1,4 +1,4 @@
-"""What the HTML reports share: the page, its tables and figures, the Pareto front.
+"""What the HTML reports share: the page, its tables and figures.
 
 ``mi-brdfs compare``, ``validate``, ``bench`` and ``fit`` each write an
 ``index.html`` beside their images; every one is made here, so that they look
@@ -11,6 +11,7 @@ import html
 from typing import Iterable, Sequence
 
 esc = html.escape
+DIGITS = 4                   # significant digits of a number in a table
 
 CSS = """
 body { font-family: sans-serif; margin: 2em; max-width: 90em; }
@@ -24,6 +25,7 @@ tr.front td:first-child { font-weight: bold; }
 .figs { display: flex; flex-wrap: wrap; gap: 0.8em; align-items: flex-start; }
 .figs img { max-width: 100%; height: auto; }
 img.render { width: 240px; image-rendering: pixelated; }
+img.wide { width: 360px; }
 figure { margin: 0; } figcaption { font-size: 0.9em; }
 """
 
@@ -35,7 +37,7 @@ def page(title: str, body: str, css: str = "") -> str:
             f"<h1>{esc(title)}</h1>\n{body}\n</body></html>\n")
 
 
-def cell(value, digits: int = 4) -> str:
+def cell(value, digits: int = DIGITS) -> str:
     """A table cell: a number to ``digits`` significant digits, right-aligned;
     text escaped and left-aligned."""
     if isinstance(value, float):
@@ -46,7 +48,7 @@ def cell(value, digits: int = 4) -> str:
 
 
 def table(header: Sequence[str], rows: Iterable[Sequence], classes: Iterable[str] = (),
-          cls: str = "") -> str:
+          cls: str = "", digits: int = DIGITS) -> str:
     """An HTML table in a horizontally scrolling box: ``header`` names, one
     ``row`` of values each (see :func:`cell`), ``classes`` a CSS class per
     row (e.g. "pass", "fail", "front")."""
@@ -55,7 +57,7 @@ def table(header: Sequence[str], rows: Iterable[Sequence], classes: Iterable[str
     body = []
     for i, row in enumerate(rows):
         c = f" class='{classes[i]}'" if i < len(classes) and classes[i] else ""
-        body.append(f"<tr{c}>" + "".join(cell(v) for v in row) + "</tr>")
+        body.append(f"<tr{c}>" + "".join(cell(v, digits) for v in row) + "</tr>")
     attr = f" class='{cls}'" if cls else ""
     return f"<div class='scroll'><table{attr}><tr>{head}</tr>{''.join(body)}</table></div>"
 
@@ -70,13 +72,3 @@ def figures(items: Iterable[tuple[str, str]], cls: str = "") -> str:
     """A row of figures: (image file, caption) each."""
     return "<div class='figs'>" + "".join(figure(s, c, cls) for s, c in items) + "</div>"
 
-
-def pareto(points: Sequence[tuple[float, float]]) -> list[bool]:
-    """For (cost, error) points: True where no other point is at least as cheap
-    and as accurate and strictly better in one of the two."""
-    front = []
-    for i, (t, e) in enumerate(points):
-        dominated = any(t2 <= t and e2 <= e and (t2 < t or e2 < e)
-                        for j, (t2, e2) in enumerate(points) if j != i)
-        front.append(not dominated)
-    return front

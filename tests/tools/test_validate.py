@@ -1,6 +1,5 @@
 """mi-brdfs validate --quick: the report's findings, its summary and exit status,
 its files, legible plots, and a real browser."""
-import dataclasses
 import json
 import os
 import shutil
@@ -282,7 +281,7 @@ def test_the_full_reports_chi2_passes_and_rejects_its_negative_controls():
     until it converges, and every negative control is rejected."""
     tests = cases.report_chi2()
     count = validate.chi2_count(tests, cases.negative_controls())
-    size = dataclasses.replace(validate.FULL, weight_samples=1000)    # χ² as in the report
+    size = validate.FULL.replace(weight_samples=1000)    # χ² as in the report
     rows = validate.sampling_section(size, tests, count)
     assert len(rows) == sum(len(c.thetas) for e in cases.ALL.values() for c in e.chi2)
     failed = [(r["model"], r["config"], r["theta"], r["p_value"], r["unconverged"])

@@ -32,12 +32,12 @@ import os
 import time
 
 from .groups import GROUPS, Group
-from .measure import (BSDF_METHODS, FULL, QUICK, References, Settings, efficiency, pareto,
-                      relmse, scene_dict, spheres_scene)
+from .measure import (BSDF_METHODS, FULL, QUICK, References, Settings, efficiency, scene_dict,
+                      spheres_scene)
 from .workers import in_subprocess
 
 __all__ = ["run", "require", "GROUPS", "Group", "Settings", "QUICK", "FULL", "References",
-           "efficiency", "pareto", "relmse", "scene_dict", "spheres_scene", "in_subprocess",
+           "efficiency", "scene_dict", "spheres_scene", "in_subprocess",
            "BSDF_METHODS"]
 
 DEFAULT_CACHE = os.path.join(os.path.expanduser("~"), ".cache", "mi_brdfs", "references")
@@ -73,7 +73,7 @@ def run(out_dir: str, quick: bool = False, only: list[str] | None = None,
             log(f"bench: {report.SMOKE_TEST}")
         start = time.perf_counter()
         results = {"settings_name": "quick" if quick else "full", "smoke_test": quick,
-                   "settings": settings.__dict__, "machine": machine(), "groups": {},
+                   "settings": settings.as_dict(), "machine": machine(), "groups": {},
                    "group_seconds": {}}
         for name in names:
             log(f"bench: {name} ...")

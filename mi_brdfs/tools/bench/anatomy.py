@@ -16,7 +16,8 @@ from __future__ import annotations
 import functools
 import os
 
-from .measure import BSDF_METHODS, bsdf_call, render, scene_dict
+from ..measures import render_waited
+from .measure import BSDF_METHODS, bsdf_call, scene_dict
 
 PACKAGE = os.path.dirname(os.path.dirname(os.path.dirname(os.path.realpath(__file__))))
 TOOLS = os.path.join(PACKAGE, "tools")
@@ -127,7 +128,7 @@ def calls_in_a_render(config: dict) -> dict[str, list[int]]:
     of one plugin instance while one path-traced render (depth 3) is traced."""
     import mitsuba as mi
     scene = mi.load_dict(scene_dict(config, 8, plane=False), parallel=False)
-    stats = profile(lambda: render(scene, 1, seed=0))
+    stats = profile(lambda: render_waited(scene, 1, seed=0))
     counts = {m: [0, 0] for m in BSDF_METHODS}
     for key, (_, nc, _, _, callers) in stats.items():
         if bsdf_method(key):

@@ -19,8 +19,9 @@ from typing import Callable
 import numpy as np
 
 from ...bsdfs import cases
+from ..measures import relmse
 from . import plots, report
-from .measure import (FULL, References, Settings, alternating, efficiency, image, relmse,
+from .measure import (FULL, References, Settings, alternating, efficiency, image,
                       scene_dict, timed)
 from .workers import in_subprocess
 

@@ -23,11 +23,14 @@ import numpy as np
 
 from ..._jit import from_numpy
 from ...bsdfs import cases
+from .. import settings
 from ..analysis import camera
+from ..measures import render_waited
 
 
-@dataclass
-class Settings:
+@dataclass(frozen=True)
+class Settings(settings.Settings):
+    """How much work each bench group does."""
     res: int
     spp: int
     repeats: int
@@ -72,21 +75,6 @@ def efficiency(relmse: float, seconds: float) -> float:
     if relmse <= 0:
         return math.inf
     return 1.0 / (relmse * seconds)
-
-
-def pareto(points: list[tuple[float, float]]) -> list[bool]:
-    """For (time, error) points: True where no other point is at least as fast
-    and as accurate and strictly better in one of the two."""
-    front = []
-    for i, (t, e) in enumerate(points):
-        dominated = any(t2 <= t and e2 <= e and (t2 < t or e2 < e)
-                        for j, (t2, e2) in enumerate(points) if j != i)
-        front.append(not dominated)
-    return front
-
-
-def relmse(test: np.ndarray, ref: np.ndarray) -> float:
-    return float(np.mean((test - ref) ** 2 / (ref + 0.01) ** 2))
 
 
 # ----------------------------------------------------------------------------
@@ -146,34 +134,24 @@ def spheres_scene(twin: str, side: str, n: int, res: int, max_depth: int = 3) ->
 #  Timing
 # ----------------------------------------------------------------------------
 
-def render(scene, spp: int, seed: int):
-    """``mi.render``, evaluated and waited for."""
-    import drjit as dr
-    import mitsuba as mi
-    image = mi.render(scene, spp=spp, seed=seed)
-    dr.eval(image)
-    dr.sync_thread()
-    return image
-
-
 def image(scene, spp: int, seed: int) -> np.ndarray:
     """A render's RGB as a NumPy array."""
-    return np.array(render(scene, spp, seed))[..., :3]
+    return np.array(render_waited(scene, spp, seed))[..., :3]
 
 
 def timed(scene, spp: int, repeats: int) -> dict:
     """Warm-up render (compiles), then the median of `repeats` renders, with the
     kernel history's split of the last one: tracing, codegen, execution (s)."""
     start = time.perf_counter()
-    render(scene, spp, seed=0)
+    render_waited(scene, spp, seed=0)
     first = time.perf_counter() - start
     times = []
     for r in range(repeats):
         start = time.perf_counter()
-        render(scene, spp, seed=r + 1)
+        render_waited(scene, spp, seed=r + 1)
         times.append(time.perf_counter() - start)
     median = statistics.median(times)
-    split = measured(lambda: render(scene, spp, seed=repeats + 1))    # where the time goes
+    split = measured(lambda: render_waited(scene, spp, seed=repeats + 1))    # where the time goes
     return {"median_s": median, "compile_s": max(first - median, 0.0), "times_s": times,
             "kernels": split["kernels"], "execution_s": split["execution_s"],
             "codegen_s": split["codegen_s"], "tracing_s": split["tracing_s"]}
@@ -184,11 +162,11 @@ def alternating(scenes: dict, spp: int, repeats: int) -> dict[str, dict]:
     ``repeats`` renders, the scenes taking turns after a warm-up render each,
     so that a change of the machine's load hits them alike."""
     for scene in scenes.values():
-        render(scene, spp, seed=0)
+        render_waited(scene, spp, seed=0)
     runs: dict[str, list[dict]] = {name: [] for name in scenes}
     for r in range(repeats):
         for name, scene in scenes.items():
-            runs[name].append(measured(lambda: render(scene, spp, seed=r + 1)))
+            runs[name].append(measured(lambda: render_waited(scene, spp, seed=r + 1)))
     return {name: {"median_s": statistics.median(m["wall_s"] for m in ms),
                    "execution_s": statistics.median(m["execution_s"] for m in ms)}
             for name, ms in runs.items()}

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import os
 
-from .measure import pareto
+from ..measures import pareto
 
 
 def _figure(size):

@@ -15,7 +15,8 @@ import time
 
 from ...bsdfs import cases
 from .anatomy import call_anatomy, calls_in_a_render, variables_created
-from .measure import BSDF_METHODS, bsdf_call, bsdf_inputs, measured, peak_mib, render, spheres_scene
+from ..measures import render_waited
+from .measure import BSDF_METHODS, bsdf_call, bsdf_inputs, measured, peak_mib, spheres_scene
 
 RESULT = "mi-brdfs-bench-result "       # the mark of the result line
 
@@ -62,8 +63,8 @@ def materials(twin: str, side: str, n: int, res: int, spp: int, repeats: int) ->
     # intermittently (bad_alloc).
     scene = mi.load_dict(spheres_scene(twin, side, n, res), parallel=False)
     result = {"load_s": time.perf_counter() - start}
-    first = measured(lambda: render(scene, spp, seed=0))
-    warm = [measured(lambda: render(scene, spp, seed=r + 1)) for r in range(repeats)]
+    first = measured(lambda: render_waited(scene, spp, seed=0))
+    warm = [measured(lambda: render_waited(scene, spp, seed=r + 1)) for r in range(repeats)]
     for part in ("wall", "tracing", "codegen", "execution"):
         result[f"first_{part}_s"] = first[f"{part}_s"]
         result[f"{part}_s"] = statistics.median(m[f"{part}_s"] for m in warm)

@@ -73,11 +73,11 @@ from ...bsdfs import cases
 from .. import compare, outputs
 from .verdicts import DOCUMENTED, Known, checks, documented, summary
 from .page import html_page
-from .sections import (ALPHA, FULL, QUICK, Size, chi2_count, equivalence_section, fresnel_section,
+from .sections import (ALPHA, FULL, QUICK, Settings, chi2_count, equivalence_section, fresnel_section,
                        furnace_section, lobe_section, negative_section, sampling_section,
                        welch_test)
 
-__all__ = ["validate", "ALPHA", "FULL", "QUICK", "Size", "DOCUMENTED", "Known", "checks",
+__all__ = ["validate", "ALPHA", "FULL", "QUICK", "Settings", "DOCUMENTED", "Known", "checks",
            "documented", "summary", "chi2_count", "equivalence_section", "fresnel_section",
            "furnace_section", "lobe_section", "negative_section", "sampling_section",
            "welch_test"]

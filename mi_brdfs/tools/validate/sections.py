@@ -10,15 +10,15 @@ import numpy as np
 
 from ..._jit import from_numpy
 from ...bsdfs import cases
-from .. import analysis, compare
+from .. import analysis, compare, settings
 from ..chi2 import ConvergedChiSquareTest
 
 MODES = ("hdr", "scanline")
 ALPHA = 0.01                      # significance level of every statistical test
 
 
-@dataclass
-class Size:
+@dataclass(frozen=True)
+class Settings(settings.Settings):
     """How much work each section does."""
     res: int
     passes: int
@@ -32,9 +32,9 @@ class Size:
 
 # χ² at 1M samples in both: fewer leave the negative controls too little power
 # (the 5 % narrower GGX lobe is not rejected at 200,000 samples).
-QUICK = Size(res=48, passes=16, spp=16, furnace_spp=256, quad=(256, 1024),
+QUICK = Settings(res=48, passes=16, spp=16, furnace_spp=256, quad=(256, 1024),
              angles=(0, 30, 60, 75, 85, 89), chi2_samples=1_000_000, weight_samples=100_000)
-FULL = Size(res=128, passes=32, spp=64, furnace_spp=4096, quad=(1024, 4096),
+FULL = Settings(res=128, passes=32, spp=64, furnace_spp=4096, quad=(1024, 4096),
             angles=(0, 15, 30, 45, 60, 70, 75, 80, 85, 88, 89),
             chi2_samples=1_000_000, weight_samples=1_000_000)
 
@@ -114,7 +114,7 @@ def welch_test(a: np.ndarray, b: np.ndarray) -> dict:
             "mean_relative_difference": rel}
 
 
-def equivalence_section(size: Size, out: str) -> list[dict]:
+def equivalence_section(size: Settings, out: str) -> list[dict]:
     results = []
     for i, (check_id, title, ours, builtin, expected) in enumerate(EQUIVALENCES):
         a = independent_renders(sphere_scene(ours, size.res), size.passes, size.spp, seed0=0)
@@ -198,7 +198,7 @@ def fresnel_section(seed: int = 5) -> list[dict]:
 #  2. White furnace
 # ----------------------------------------------------------------------------
 
-def rendered_albedo(config: dict, angles, size: Size) -> np.ndarray:
+def rendered_albedo(config: dict, angles, size: Settings) -> np.ndarray:
     """E(theta_i) by rendering: a large plane with the BSDF inside a uniform white
     environment, seen by an orthographic camera at theta_i (every pixel sees
     the surface at exactly that angle), with direct lighting only."""
@@ -243,7 +243,7 @@ def furnace_curves(config: dict) -> list[tuple[str, dict]]:
     return curves
 
 
-def furnace_section(size: Size, out: str, models: dict) -> list[dict]:
+def furnace_section(size: Settings, out: str, models: dict) -> list[dict]:
     from matplotlib.figure import Figure    # no pyplot: no global backend change
     import mitsuba as mi
 
@@ -312,7 +312,7 @@ def chi2_count(models: dict, negatives: dict) -> int:
     return sum(len(c.thetas) for tests in models.values() for _, c in tests) + len(negatives)
 
 
-def sampling_section(size: Size, models: dict, count: int | None = None) -> list[dict]:
+def sampling_section(size: Settings, models: dict, count: int | None = None) -> list[dict]:
     """χ² and sample weights of every test of ``models`` ({model: [(label,
     cases.Chi2)]}), at the case's resolution and viewer azimuth.
     ``count``: the number of χ² tests the significance is corrected for."""
@@ -343,7 +343,7 @@ def sampling_section(size: Size, models: dict, count: int | None = None) -> list
     return rows
 
 
-def negative_section(size: Size, negatives: dict, count: int) -> list[dict]:
+def negative_section(size: Settings, negatives: dict, count: int) -> list[dict]:
     """The χ² test of each negative control (:func:`.cases.negative_controls`): the
     sampler of one configuration against the pdf of a slightly different
     one. Each must be rejected."""

@@ -87,12 +87,8 @@ def scene_dict(bsdf, res: int, view: str = COST_VIEW) -> dict:
 
 def render(scene, spp: int, seed: int) -> np.ndarray:
     """A render, evaluated and synchronised (H, W, 3) float64."""
-    import drjit as dr
-    import mitsuba as mi
-    image = mi.render(scene, spp=spp, seed=seed)
-    dr.eval(image)
-    dr.sync_thread()
-    return np.array(image, dtype=np.float64)[..., :3]
+    from ..measures import render_waited
+    return np.array(render_waited(scene, spp, seed), dtype=np.float64)[..., :3]
 
 
 def release() -> None:

@@ -12,10 +12,11 @@ import os
 import socket
 import time
 import traceback
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 
 import numpy as np
 
+from ..settings import Settings as SettingsBase
 from . import optimise
 
 SLICE_ANGLES = (0.0, 30.0, 60.0, 80.0)     # viewer angles of the lobe slices (degrees)
@@ -23,7 +24,7 @@ SLICE_POINTS = 181
 
 
 @dataclass(frozen=True)
-class Settings:
+class Settings(SettingsBase):
     """How much work one fit does (:data:`QUICK`, :data:`FULL`)."""
     metric: str = "cosine"                   # the reported BRDF error (metric.METRICS)
     objective: str = "cbrt"                  # what the fit minimises (metric.OBJECTIVES)
@@ -39,9 +40,6 @@ class Settings:
     cost: bool = True                        # render cost (mi_brdfs.tools.fit.cost)
     cost_rounds: tuple[int, int] = (6, 40)   # cost: at least, at most this many rounds
     cost_tolerance: float = 0.05             # cost: until the 90 % interval's high/low <= 1.05
-
-    def replace(self, **changes) -> "Settings":
-        return Settings(**{**asdict(self), **changes})
 
 
 FULL = Settings()

@@ -18,6 +18,7 @@ import numpy as np
 
 from ..settings import Settings as SettingsBase
 from . import optimise
+from .optimise import fit_model, problem  # noqa: F401  (used as task.* by tools/explore)
 
 SLICE_ANGLES = (0.0, 30.0, 60.0, 80.0)     # viewer angles of the lobe slices (degrees)
 SLICE_POINTS = 181

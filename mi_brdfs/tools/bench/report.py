@@ -157,29 +157,31 @@ def tracing(rows: list[dict]) -> str:
 
 
 def trade(rows: list[dict]) -> str | None:
-    """The best model per material (lowest BRDF error) and the cheapest model
-    within 0.05 of it, with their render cost against the material's plugin."""
-    done = [r for r in rows if not r["failed"]]
+    """The first-ranked model per material (by the image's FLIP, the cheaper
+    of those within its tie band) and the best model that costs less beyond
+    the timing's interval, with their render cost against the material's
+    plugin."""
+    done = [r for r in rows if not r["failed"] and r.get("rank") is not None]
     if not done:
         return None
+
     def fit(r):
-        flip = "" if r.get("image_flip") is None else f", FLIP {r['image_flip']:.2f}"
-        return f"{r['model']} ({r['brdf_error']:.3f}{flip}, cost {r['cost_ratio']:.2f}x)"
+        cost = ("" if r.get("cost_ratio") is None else
+                f", cost {r['cost_ratio']:.2f}x ({r['cost_low']:.2f}-{r['cost_high']:.2f})")
+        return f"{r['model']} (FLIP {r['image_flip']:.3f}, BRDF error {r['brdf_error']:.3f}{cost})"
 
     parts = []
     for material in dict.fromkeys(r["material"] for r in done):
-        mine = [r for r in done if r["material"] == material]
-        best = min(mine, key=lambda r: r["brdf_error"])
-        close = [r for r in mine if r["brdf_error"] <= best["brdf_error"] + 0.05]
-        cheap = min(close, key=lambda r: r["cost_ratio"])
-        part = f"{material}: {fit(best)}" + ("" if cheap is best else f", or {fit(cheap)}")
-        parts.append(part)
-    return ("Which model for which material (BRDF error, 0 = identical, 1 = black; the "
-            "image's FLIP in the standard scene; render cost against the material's own "
-            "plugin): " + "; ".join(parts) + ". The BRDF error weighs the specular peaks, "
-            "which grow towards grazing angles, far above a diffuse colour: where FLIP is "
-            "high with a low BRDF error, the fit matched the highlight, not the colour. "
-            "The fit report with every model's error, renders and XML is in trade/index.html.")
+        mine = sorted((r for r in done if r["material"] == material), key=lambda r: r["rank"])
+        best = mine[0]
+        cheap = [r for r in mine if r.get("cost_high") is not None and best.get("cost_low")
+                 is not None and r["cost_high"] < best["cost_low"]]
+        alt = min(cheap, key=lambda r: r["image_flip"]) if cheap else None
+        parts.append(f"{material}: {fit(best)}" + (f", or cheaper {fit(alt)}" if alt else ""))
+    return ("Which model for which material (ranked by the image's FLIP over three standard "
+            "views; BRDF error 0 = identical, 1 = black; render cost against the material's own "
+            "plugin, a 90 % interval): " + "; ".join(parts) + ". The fit report with every "
+            "model's errors, renders and XML is in trade/index.html.")
 
 
 # ----------------------------------------------------------------------------

@@ -1,5 +1,5 @@
-"""The BRDF-space metrics the fit minimises, and the direction pairs they are
-estimated on.
+"""The BRDF-space metrics the fit reports (``brdf_error``), the objective it
+minimises, and the direction pairs both are estimated on.
 
 ``cosine`` (the default): the L² distance of the two BRDFs under the
 projected solid angle of both directions, relative to the target's own norm::
@@ -24,6 +24,19 @@ sample weighted by its solid angle, over the pairs with both angles at most
 
 reported relative to a black BSDF's, as ``cosine``.
 
+**The objective** (:data:`OBJECTIVES`, :func:`compress`): the same pairs,
+each ``eval`` value compressed — by default its cube root, c(x) =
+(x + 10⁻⁴)^(1/3) - 10^(-4/3) — and weighted by ``Pairs.shown``: for
+``cosine`` the pair's weight times cos θ_i (the pixels that see the viewer;
+``eval`` already holds cos θ_o), for ``ngan`` its own weight::
+
+    E_c²(f) = Σ shown ‖c(eval_t) - c(eval)‖²,   objective = E_c(f) / E_c(0)
+
+A sum of squares of ``eval`` itself is ruled by the peaks (they grow towards
+the horizon: 45 % of the cosine metric's weight lies within 10° of it, median
+over the trade materials, 5 % of the cube root's; ``python -m
+mi_brdfs.tools.fit.study``), and a fit to it gives up a dim colour first.
+
 **The direction pairs** (fixed by a seed: every fit of a run sees the same
 set): viewers ω_i stratified over the hemisphere, uniformly in (cos θ, φ)
 (``viewers`` = (n_z, n_φ) strata, one jittered point each: the lowest stratum
@@ -46,6 +59,9 @@ from dataclasses import dataclass
 import numpy as np
 
 METRICS = ("cosine", "ngan")
+OBJECTIVES = ("cbrt", "log", "linear")   # what the optimiser minimises (see compress)
+CBRT_FLOOR = 1e-4                   # c(x) = (x + 1e-4)^(1/3) - 1e-4^(1/3): finite slope at 0
+LOG_FLOOR = 1e-2                    # c(x) = log(1 + x / 0.01)
 LOBE_ALPHAS = (0.02, 0.1, 0.4)      # GGX roughness of the mirror-guided light samples
 NGAN_MAX_DEG = 80.0                 # Ngan et al.'s largest angle
 COS_MIN = 1e-4                      # lights closer to the horizon are left out
@@ -54,10 +70,11 @@ SEED = 20050629                     # of the jitter (EGSR 2005's first day)
 
 @dataclass(frozen=True)
 class Pairs:
-    """Direction pairs and each pair's weight in the metric (NumPy, float64)."""
+    """Direction pairs and each pair's weights (NumPy, float64)."""
     wi: np.ndarray          # (N, 3) viewers, local frame
     wo: np.ndarray          # (N, 3) lights
     weight: np.ndarray      # (N,) multiplies Σ_c (eval_t - eval)² in E²
+    shown: np.ndarray       # (N,) multiplies Σ_c (c(eval_t) - c(eval))² in the objective
 
 
 def stratified(nz: int, nphi: int, rng) -> np.ndarray:
@@ -115,7 +132,7 @@ def pairs(metric: str, viewers: tuple[int, int], uniform: tuple[int, int], lobe:
     n_v, n_u = len(view), uniform[0] * uniform[1]
     side = max(1, int(round(math.sqrt(lobe))))
     n_l = side * side if lobe > 0 else 0
-    wi_all, wo_all, w_all = [], [], []
+    wi_all, wo_all, w_all, shown_all = [], [], [], []
     for wi in view:
         lights = [uniform_hemisphere(stratified(*uniform, rng))]
         for alpha in (LOBE_ALPHAS if n_l else ()):
@@ -130,15 +147,41 @@ def pairs(metric: str, viewers: tuple[int, int], uniform: tuple[int, int], lobe:
         w = (2.0 * math.pi / n_v) / mixture                      # 1/(n_v p(ω_i)) · 1/mixture
         cos_i, cos_o = wi[2], wo[:, 2]
         if metric == "cosine":
+            shown = w * cos_i                 # eval itself, over the pixels that see θ_i
             w = w * cos_i / cos_o             # (eval)² = f² cos²θ_o -> f² cos θ_i cos θ_o
         else:
             limit = math.cos(math.radians(NGAN_MAX_DEG))
             w = w * ((cos_i >= limit) & (cos_o >= limit))
+            shown = w
         keep = w > 0
         wi_all.append(wi_rep[keep])
         wo_all.append(wo[keep])
         w_all.append(w[keep])
-    return Pairs(np.concatenate(wi_all), np.concatenate(wo_all), np.concatenate(w_all))
+        shown_all.append(shown[keep])
+    return Pairs(*(np.concatenate(a) for a in (wi_all, wo_all, w_all, shown_all)))
+
+
+def compress(x, objective: str):
+    """The objective's compression of eval values (NumPy or Dr.Jit, per channel):
+    ``cbrt`` the cube root (the lightness response: CIE L* grows as Y^(1/3);
+    Fores, Ferwerda & Gu 2012 found a cube-root metric the closest to what
+    observers judge among the RMS metrics of BRDF fitting), ``log`` a
+    logarithm, ``linear`` none (the metric itself). A floor keeps the slope at
+    0 finite: a model value of 0 still gets a gradient."""
+    if objective not in OBJECTIVES:
+        raise ValueError(f"unknown objective {objective!r}; valid: {', '.join(OBJECTIVES)}")
+    if objective == "linear":
+        return x
+    if isinstance(x, np.ndarray):
+        x = np.maximum(x, 0.0)
+        if objective == "cbrt":
+            return np.cbrt(x + CBRT_FLOOR) - CBRT_FLOOR ** (1.0 / 3.0)
+        return np.log1p(x / LOG_FLOOR)
+    import drjit as dr
+    x = dr.fmax(x, 0.0)
+    if objective == "cbrt":
+        return dr.cbrt(x + CBRT_FLOOR) - CBRT_FLOOR ** (1.0 / 3.0)
+    return dr.log(1.0 + x / LOG_FLOOR)
 
 
 def relative_error(target: np.ndarray, model: np.ndarray, weight: np.ndarray) -> float:

@@ -13,12 +13,21 @@ a model is computed or sampled (``sampling``, ``sample_visible``, Ward's
 ``mi.traverse`` when loaded with its defaults (so optional alternatives stay
 out: Ward's anisotropic ``alpha_u``/``alpha_v``, toon's ramps), each with its
 declaration in the plugin's ``PARAMS`` (range, kind, role). Each is searched
-over the box [lo, hi] of its declaration, with ``hi`` = the declared upper
-end, or ``upper``, or 1 for an unbounded colour (white); shape parameters
-with a lower end of 0 are searched on a logarithmic scale — exponents
-(upper end above 10) as log(1 + x) up to ``EXPONENT_MAX``, roughnesses as
-log(x + 1e-3·hi) — all others linearly. The optimiser moves unit
-coordinates y in [0, 1]^n (clipped after each step) mapped onto the boxes.
+over [lo, hi] of its declaration, with ``hi`` = the declared upper end, or
+``upper``, or 1 for an unbounded colour (white); exponents stop at
+``EXPONENT_MAX``. The optimiser moves an unconstrained coordinate u per
+parameter (per channel of a colour), and the parameter is the logistic
+x = lo + (hi - lo)·σ(u): a smooth bijection from the real line onto the open
+range, so no gradient is ever cut off (a clip has zero gradient at its bound:
+a parameter that touched it stayed there). Near lo, x - lo ≈ (hi - lo)·e^u,
+so a roughness or an exponent far below its upper end moves on a log scale.
+u is kept within ±``U_MAX`` (σ = 6·10⁻⁶ from either end).
+
+Where the search starts (:func:`.optimise.candidates`): the plugin's
+defaults; every shape and weight parameter at the low end, then at the high
+end (u = ±``U_START``); then a Latin hypercube across the ranges
+(:meth:`Free.spread`: on a log scale for roughnesses and exponents, evenly in
+angle for cosines).
 """
 from __future__ import annotations
 
@@ -31,7 +40,10 @@ import numpy as np
 # Options that make different models (the others are computation choices).
 VARIANTS = {"cook_torrance": ("distribution", "geometry"), "toon": ("specular_model",)}
 EXPONENT_MAX = 1e6        # exponents are searched up to here (a mirror-like lobe)
-LOG_SHAPE_OFFSET = 1e-3   # roughness: log(x + 1e-3 hi)
+U_MAX = 30.0              # coordinates stay within ±U_MAX (σ(-30) = 1e-13; σ(u) rounds to 1 in float32 from u = 17)
+U_START = 6.0             # a start "at a bound" is u = ±6 (0.25 % of the range inside it)
+ROUGHNESS_START_FLOOR = 0.01   # log-scale starts: roughnesses over [0.01 hi, hi],
+EXPONENT_START_FLOOR = 1.0     # exponents over [1, EXPONENT_MAX]
 EC = "+ec"
 
 
@@ -84,40 +96,51 @@ def select(wanted: list[str] | None) -> list[Model]:
 
 
 # ----------------------------------------------------------------------------
-#  Free parameters and their search boxes
+#  Free parameters: a smooth bijection from the real line onto each range
 # ----------------------------------------------------------------------------
 
 @dataclass(frozen=True)
 class Free:
-    """A fitted parameter: its traverse key, box and scale."""
+    """A fitted parameter: its traverse key and range. The optimiser moves an
+    unconstrained coordinate u; the parameter is x = lo + (hi - lo)·σ(u)."""
     name: str
     key: str                 # mi.traverse key ("alpha.value", "k")
     colour: bool             # three channels (a "spectrum" parameter)
     lo: float
     hi: float
-    offset: float | None     # log scale: log(x + offset); None: linear
+    log_start: bool = False  # starts spread on a log scale (roughnesses, exponents)
 
-    def _ends(self):
-        if self.offset is None:
-            return self.lo, self.hi
-        return math.log(self.lo + self.offset), math.log(self.hi + self.offset)
+    def value(self, u):
+        """Coordinate(s) u -> parameter value (Dr.Jit or NumPy)."""
+        return self.lo + (self.hi - self.lo) * logistic(u)
 
-    def value(self, y):
-        """Unit coordinate(s) y -> parameter value (Dr.Jit or NumPy)."""
-        a, b = self._ends()
-        t = a + (b - a) * y
-        if self.offset is None:
-            return t
-        import drjit as dr
-        exp = dr.exp if not isinstance(t, (float, np.ndarray, np.floating)) else np.exp
-        return exp(t) - self.offset
+    def coordinate(self, x, edge: float = U_MAX) -> float:
+        """Parameter value -> coordinate, kept within ±edge (a value at a
+        bound maps to the edge: u = ±∞ is no start)."""
+        t = (float(x) - self.lo) / (self.hi - self.lo)
+        t = min(max(t, 1e-300), 1.0 - 1e-16)
+        return float(min(max(math.log(t) - math.log1p(-t), -edge), edge))
 
-    def unit(self, x: float) -> float:
-        """Parameter value -> unit coordinate (clipped into the box)."""
-        x = min(max(float(x), self.lo), self.hi)
-        a, b = self._ends()
-        t = x if self.offset is None else math.log(x + self.offset)
-        return (t - a) / (b - a) if b > a else 0.0
+    def spread(self, s: float) -> float:
+        """A start's value at s in [0, 1] across the range: on a log scale for
+        a roughness or an exponent (a lobe's width spans decades), evenly in
+        angle for a cosine (a range [-1, 1]: toon's thresholds), else linear."""
+        if self.lo == -1.0 and self.hi == 1.0 and not self.colour:
+            return math.cos(math.pi * (1.0 - s))        # a cosine: evenly in angle
+        if not self.log_start:
+            return self.lo + (self.hi - self.lo) * s
+        floor = EXPONENT_START_FLOOR if self.hi > 10.0 else ROUGHNESS_START_FLOOR * self.hi
+        return self.lo + floor * (self.hi / floor) ** s
+
+
+def logistic(u):
+    """σ(u) = 1/(1 + e^-u), NumPy (float64) or Dr.Jit. With |u| <= U_MAX its
+    value and gradient are finite, and relative precision holds near 0 (where
+    1 + tanh(u/2) would cancel in float32: an exponent of 10 in [0, 10⁶])."""
+    if isinstance(u, (float, int, np.ndarray, np.floating)):
+        return 1.0 / (1.0 + np.exp(-np.asarray(u, dtype=np.float64)))
+    import drjit as dr
+    return dr.rcp(1.0 + dr.exp(-u))
 
 
 def free_parameters(plugin_cls, traversed: list[str]) -> list[Free]:
@@ -131,41 +154,28 @@ def free_parameters(plugin_cls, traversed: list[str]) -> list[Free]:
             continue
         lo = p.lo if p.lo is not None else -1.0
         hi = p.probe_hi()
-        offset = None
-        if p.role == "shape" and lo == 0.0:
-            if hi > 10.0:
-                hi, offset = min(hi, EXPONENT_MAX), 1.0
-            else:
-                offset = LOG_SHAPE_OFFSET * hi
-        out.append(Free(name, key, p.kind == "spectrum", lo, hi, offset))
+        log_start = p.role == "shape" and lo == 0.0
+        if log_start and hi > 10.0:
+            hi = min(hi, EXPONENT_MAX)
+        out.append(Free(name, key, p.kind == "spectrum", lo, hi, log_start))
     return out
 
 
-def starts(free: list[Free], defaults: dict, count: int, seed: int = 7) -> list[np.ndarray]:
-    """``count`` starting points in unit coordinates: the plugin's defaults,
-    then a Latin hypercube over the boxes (each colour channel its own axis)."""
-    dims = sum(3 if f.colour else 1 for f in free)
-    first = []
-    for f in free:
-        d = defaults[f.name]
-        first += [f.unit(d)] * (3 if f.colour else 1)
-    points = [np.array(first)]
-    n = count - 1
-    if n > 0:
-        rng = np.random.default_rng(seed)
-        grid = np.stack([(rng.permutation(n) + rng.random(n)) / n for _ in range(dims)], axis=1)
-        points += list(grid)
-    return points[:count]
-
-
-def split(free: list[Free], y: np.ndarray) -> dict:
-    """A flat unit vector -> {name: unit value (float or 3-tuple)}."""
+def split(free: list[Free], u: np.ndarray) -> dict:
+    """A flat coordinate vector -> {name: coordinate (float or 3-tuple)}."""
     out, i = {}, 0
     for f in free:
         n = 3 if f.colour else 1
-        out[f.name] = tuple(y[i:i + n]) if f.colour else float(y[i])
+        out[f.name] = tuple(float(c) for c in u[i:i + n]) if f.colour else float(u[i])
         i += n
     return out
+
+
+def values(free: list[Free], u: np.ndarray) -> dict:
+    """A flat coordinate vector -> {name: parameter value (float or list of 3)}."""
+    coords = split(free, u)
+    return {f.name: ([float(v) for v in f.value(np.array(coords[f.name]))] if f.colour
+                     else float(f.value(coords[f.name]))) for f in free}
 
 
 # ----------------------------------------------------------------------------

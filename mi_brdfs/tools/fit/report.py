@@ -1,26 +1,35 @@
 """What ``mi-brdfs fit -o DIR`` writes (a report folder, :mod:`..outputs`):
 
 ``fits.json``
-    a list of records, one per target × model: ``target`` (as given),
-    ``model``, ``plugin``, ``parameters`` (the fitted material: plugin
-    properties, options included; ``{"type": plugin, **parameters}`` loads
-    it), ``brdf_error`` (:mod:`.metric`: 0 identical, 1 a black BSDF's error),
-    ``image_relmse`` and ``image_flip`` (the fitted model's render against the
-    target's in the standard scene, same seed and spp), ``cost_ratio``
-    (render time over the target's, same scene and spp, side by side) and
-    ``seconds`` (the fit's wall time), and more: ``metric``,
+    a list of records, one per target × model, in rank order per target:
+    ``target`` (as given), ``model``, ``plugin``, ``rank`` (1 = first,
+    :mod:`.rank`), ``parameters`` (the fitted material: plugin properties,
+    options included; ``{"type": plugin, **parameters}`` loads it),
+    ``image_flip`` and ``image_relmse`` (the fitted model's renders against
+    the target's, mean over the standard views, same seed and spp;
+    ``image_views`` per view), ``brdf_error`` (the ``metric``'s: 0
+    identical, 1 a black BSDF's error), ``objective`` and
+    ``objective_error`` (what the fit minimised, and its value), ``cost_ratio``
+    with ``cost_low`` and ``cost_high`` (render time over the target's: the
+    90 % interval, :mod:`.cost`), ``ops_ratio`` (traced operations over the
+    target's) and ``seconds`` (the fit's wall time), and more: ``effective``
+    (the colours that matter, :mod:`.effective`), ``albedo`` and
+    ``target_albedo`` ([0°, 60°, 85°][R, G, B]), ``image_noise_flip`` and
     ``image_noise_relmse`` (the target against itself at another seed: the
-    noise floor of ``image_relmse``), ``xml``, ``render_seconds``,
-    ``start_errors``; a failed fit has an ``error`` message instead.
+    noise floor), ``cost_rounds``, ``cost_load`` (the machine's load average
+    when it was timed), ``ops``, ``reruns`` and ``worker`` (a task re-run
+    after its Dask worker was lost), ``target_features``, ``xml``,
+    ``renders``, ``start_errors``; a failed fit has ``error`` instead.
 ``fits.csv``
-    the same records, one row each, parameters as JSON.
+    the main fields, one row each, parameters and effective colours as JSON.
 ``index.html``
-    per target: the Pareto plot of BRDF error against cost, the table, the
-    renders side by side and the lobe slices (``eval`` in the plane of
-    incidence at four viewer angles, the target and the models on the front).
+    per target: the verdict, what the target has that no model has (when
+    none comes close), the Pareto plot of image error against cost, the table
+    in rank order, the renders (the three views side by side) and the lobe
+    slices per colour channel.
 ``TARGET__MODEL.xml``
     each fitted material as a ``<bsdf>`` that ``mi.load_file`` loads as
-    written; ``TARGET__MODEL.png`` its render, ``TARGET.png`` the target's.
+    written; ``TARGET__MODEL.jpg`` its renders, ``TARGET.jpg`` the target's.
 """
 from __future__ import annotations
 
@@ -30,15 +39,17 @@ import json
 import math
 import os
 
-import numpy as np
-
-from ...render import tonemap
-from . import models as M
+from . import effective, models as M, plots, rank
 from .targets import slug
 
-FIELDS = ("target", "model", "plugin", "parameters", "brdf_error", "image_relmse", "image_flip",
-          "cost_ratio", "seconds")
-EXTRA = ("metric", "image_noise_relmse", "xml", "render_seconds", "start_errors", "error")
+FIELDS = ("target", "model", "plugin", "rank", "parameters", "image_flip", "image_relmse",
+          "brdf_error", "metric", "objective", "objective_error", "cost_ratio", "cost_low",
+          "cost_high", "ops_ratio", "seconds")
+EXTRA = ("image_views", "image_noise_flip", "image_noise_relmse", "effective", "albedo",
+         "target_albedo", "cost_rounds", "cost_load", "ops", "reruns", "worker",
+         "target_features", "xml", "renders", "start_errors", "error", "cost_error")
+CSV_EXTRA = ("effective", "image_noise_flip", "cost_rounds", "cost_load", "reruns", "xml",
+             "error")
 TONEMAP = "aces"
 
 
@@ -50,74 +61,28 @@ def clean(record: dict) -> dict:
     """The JSON record: FIELDS, then EXTRA where present."""
     out = {k: record.get(k) for k in FIELDS}
     if "starts" in record:
-        record = {**record, "start_errors": [s["error"] for s in record["starts"]]}
+        record = {**record, "start_errors": [s["objective"] for s in record["starts"]]}
     out.update({k: record[k] for k in EXTRA if record.get(k) is not None})
     return out
 
 
-def pareto(points: list[tuple[float, float]]) -> list[bool]:
-    """For (cost, error) points: True where no other point is at least as cheap
-    and as accurate and strictly better in one."""
-    return [not any(c2 <= c and e2 <= e and (c2 < c or e2 < e)
-                    for j, (c2, e2) in enumerate(points) if j != i)
-            for i, (c, e) in enumerate(points)]
-
-
-def _figure(width, height):
-    from matplotlib.figure import Figure      # no pyplot: no global backend change
-    return Figure(figsize=(width, height), dpi=100)
-
-
-def pareto_plot(path: str, title: str, rows: list[dict]) -> None:
-    fig = _figure(6.4, 4.4)
-    ax = fig.subplots()
-    pts = [(r["cost_ratio"], r["brdf_error"]) for r in rows]
-    front = pareto(pts)
-    for r, (c, e), on in zip(rows, pts, front):
-        ax.scatter([c], [max(e, 1e-6)], s=28 if on else 14,
-                   color="C3" if on else "C0", zorder=3 if on else 2)
-        if on:
-            ax.annotate(r["model"], (c, max(e, 1e-6)), fontsize=7, xytext=(4, 3),
-                        textcoords="offset points")
-    line = sorted((c, max(e, 1e-6)) for (c, e), on in zip(pts, front) if on)
-    if line:
-        ax.plot(*zip(*line), color="C3", lw=1, alpha=0.6, label="Pareto front")
-        ax.legend(fontsize=8)
-    costs = [c for c, _ in pts]
-    if max(costs) > 4 * min(costs):           # else a log axis has no labelled decade
-        ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.set_xlabel("render cost / target's (same scene and spp)")
-    ax.set_ylabel("BRDF error (1 = black)")
-    ax.set_title(title, fontsize=9)
-    ax.grid(True, which="both", alpha=0.3)
-    fig.savefig(path, bbox_inches="tight")
-
-
-def slice_plot(path: str, title: str, target_record: dict, rows: list[dict]) -> None:
-    angles = target_record["slices"]["angles"]
-    fig = _figure(3.2 * len(angles), 3.0)
-    axes = fig.subplots(1, len(angles))
-    theta = np.linspace(-89.5, 89.5, len(target_record["slices"]["target"][0]))
-    for k, (ax, a) in enumerate(zip(axes, angles)):
-        ax.plot(theta, target_record["slices"]["target"][k], color="black", lw=2, label="target")
-        for i, r in enumerate(rows):
-            ax.plot(theta, r["slices"]["model"][k], lw=1, color=f"C{i % 10}", label=r["model"])
-        ax.set_title(f"viewer at θ = {a:g}° (mirror side > 0)", fontsize=8)
-        ax.set_xlabel("light θ (degrees)", fontsize=8)
-        ax.tick_params(labelsize=7)
-    axes[0].set_ylabel("eval (f·cos θ), channel mean", fontsize=8)
-    axes[-1].legend(fontsize=6)
-    fig.suptitle(title, fontsize=9)
-    fig.savefig(path, bbox_inches="tight")
-
-
-def write(out: str, records: list[dict], settings, command: str) -> None:
-    """Every file of the report into the folder ``out`` (a temporary one)."""
+def write(out: str, records: list[dict], settings, command: str, features: dict | None = None
+          ) -> list[dict]:
+    """Every file of the report into the folder ``out`` (a temporary one);
+    the records in the report's order (targets as given, fits in rank order,
+    failed fits last), each with its ``rank``."""
     by_target: dict[str, list[dict]] = {}
     for r in records:
         by_target.setdefault(r["target_name"], []).append(r)
-    for r in records:
+    ordered = []
+    for name, rows in by_target.items():
+        ranks = rank.ranked(rows)
+        for i, r in enumerate(ranks, 1):
+            r["rank"] = i
+            if features and name in features:
+                r["target_features"] = features[name]
+        ordered += ranks + [r for r in rows if "error" in r]
+    for r in ordered:
         if "error" in r:
             continue
         stem = file_stem(r)
@@ -126,73 +91,126 @@ def write(out: str, records: list[dict], settings, command: str) -> None:
             f.write(M.xml(r["parameters"]))
         images = r.get("images")
         if images is not None:
-            tonemap.write_png(os.path.join(out, stem + ".png"), images["model"], TONEMAP)
-            target_png = os.path.join(out, r["target_name"] + ".png")
-            if not os.path.exists(target_png):
-                tonemap.write_png(target_png, images["target"], TONEMAP)
-    sections = []
-    for name, rows in by_target.items():
-        sections.append(_section(out, name, rows))
+            r["renders"] = stem + ".jpg"
+            plots.views_strip(os.path.join(out, r["renders"]), images["model"], TONEMAP)
+            target_jpg = os.path.join(out, r["target_name"] + ".jpg")
+            if not os.path.exists(target_jpg):
+                plots.views_strip(target_jpg, images["target"], TONEMAP)
+    sections = [_section(out, name, [r for r in ordered if r["target_name"] == name],
+                         (features or {}).get(name)) for name in by_target]
     with open(os.path.join(out, "fits.json"), "w") as f:
-        json.dump([clean(r) for r in records], f, indent=1)
+        json.dump([clean(r) for r in ordered], f, indent=1)
     with open(os.path.join(out, "fits.csv"), "w", newline="") as f:
         w = csv.writer(f)
-        w.writerow(FIELDS + ("image_noise_relmse", "xml", "error"))
-        for r in records:
-            w.writerow([json.dumps(r.get(k)) if k == "parameters" else r.get(k)
-                        for k in FIELDS + ("image_noise_relmse", "xml", "error")])
+        w.writerow(FIELDS + CSV_EXTRA)
+        for r in ordered:
+            w.writerow([json.dumps(r.get(k)) if k in ("parameters", "effective") else r.get(k)
+                        for k in FIELDS + CSV_EXTRA])
     with open(os.path.join(out, "index.html"), "w") as f:
         f.write(_html(sections, settings, command))
+    return ordered
 
+
+# ----------------------------------------------------------------------------
+#  HTML
+# ----------------------------------------------------------------------------
 
 def _fmt(x, spec=".3g") -> str:
     return "–" if x is None or (isinstance(x, float) and math.isnan(x)) else format(x, spec)
 
 
-def _section(out: str, name: str, rows: list[dict]) -> str:
+def _rgb(c) -> str:
+    return "–" if c is None else "(" + ", ".join(f"{v:.2f}" for v in c) + ")"
+
+
+def _albedo(a) -> str:
+    """Directional albedo per angle: its largest channel, flagged above 1."""
+    if not a:
+        return "–"
+    cells = []
+    for angle, rgb in zip(effective.ALBEDO_ANGLES, a):
+        top = max(rgb)
+        text = f"{angle:g}°: {top:.2f}"
+        cells.append(f'<b class="over">{text}</b>' if top > 1.0 + 1e-3 else text)
+    return "<br>".join(cells)
+
+
+def _cost(r: dict) -> str:
+    if r.get("cost_ratio") is None:
+        return "–" if "cost_error" not in r else f"failed: {html.escape(r['cost_error'])}"
+    return f"{r['cost_ratio']:.2f} ({r['cost_low']:.2f}–{r['cost_high']:.2f})"
+
+
+def _row(r: dict, front: set, equals: dict) -> str:
+    e = r.get("effective") or {}
+    params = ", ".join(f"{k}={_short(v)}" for k, v in r["parameters"].items()
+                       if k not in ("type", "mode"))
+    mark = " ★" if r["model"] in front else ""
+    note = []
+    if equals.get(r["model"]):
+        note.append("equal cost: " + ", ".join(equals[r["model"]]))
+    if r.get("reruns"):
+        note.append(f"re-run after its worker was lost ({r['reruns']}×), finished on {r['worker']}")
+    note += e.get("notes", [])
+    return (f"<tr><td>{r['rank']}</td><td>{html.escape(r['model'])}{mark}</td>"
+            f"<td>{_fmt(r.get('image_flip'))}</td><td>{_fmt(r.get('image_relmse'))}</td>"
+            f"<td>{_fmt(r['brdf_error'], '.4g')}</td><td>{_fmt(r.get('objective_error'), '.4g')}</td>"
+            f"<td>{_cost(r)}</td><td>{_fmt(r.get('ops_ratio'), '.2f')}</td>"
+            f"<td>{_rgb(e.get('diffuse'))}</td><td>{_rgb(e.get('specular_0'))}<br>"
+            f"{_rgb(e.get('specular_85'))}</td><td>{_albedo(r.get('albedo'))}</td>"
+            f"<td>{_fmt(r['seconds'], '.1f')}</td><td class=p>{html.escape(params)}"
+            f"{'<br><i>' + html.escape('; '.join(note)) + '</i>' if note else ''}</td>"
+            f'<td><a href="{r["xml"]}">xml</a></td></tr>')
+
+
+HEAD = ("<tr><th>#</th><th>model</th><th>FLIP</th><th>image relMSE</th><th>BRDF error</th>"
+        "<th>objective</th><th>cost × (90 %)</th><th>ops ×</th><th>diffuse colour</th>"
+        "<th>specular colour at 0° / 85°</th><th>albedo (max channel)</th><th>fit s</th>"
+        "<th>parameters</th><th>XML</th></tr>")
+
+
+def _section(out: str, name: str, rows: list[dict], found: dict | None) -> str:
     ok = [r for r in rows if "error" not in r]
     failed = [r for r in rows if "error" in r]
     title = html.escape(rows[0]["target"])
-    parts = [f'<h2 id="{name}">{title}</h2>']
+    plugin = rank.target_plugin(rows[0]["target"])
+    parts = [f'<h2 id="{name}">{title}</h2>',
+             f"<p class=verdict>{html.escape(rank.verdict(rows, plugin))}</p>"]
     if not ok:
         parts.append("<p>every fit failed.</p>")
-    ok.sort(key=lambda r: r["brdf_error"])
-    measured = [r for r in ok if r.get("cost_ratio") is not None]
-    front_models = set()
-    if measured:
-        pareto_plot(os.path.join(out, f"{name}__pareto.png"), rows[0]["target"], measured)
+    best = ok[0] if ok else None
+    if best is not None and rank.quality(best) > rank.SMALL_FLIP and found:
+        said = effective.describe(found)
+        parts.append(f"<p>No course model comes close (best FLIP {rank.quality(best):.3f}). "
+                     + ("What the target has that none of them has: " + "; ".join(said) + "."
+                        if said else "No feature the fit can name (spectral Fresnel, "
+                        "anisotropy) was found in the target.") + "</p>")
+    front = {r["model"] for r in rank.front(ok)}
+    equals = {r["model"]: [o["model"] for o in ok if o is not r and o["model"] in front
+                           and rank.equal_cost(r, o)] for r in ok if r["model"] in front}
+    if any(r.get("cost_ratio") is not None for r in ok):
+        plots.pareto_plot(os.path.join(out, f"{name}__pareto.png"), rows[0]["target"], ok)
         parts.append(f'<img src="{name}__pareto.png" alt="Pareto plot">')
-        front = pareto([(r["cost_ratio"], r["brdf_error"]) for r in measured])
-        front_models = {r["model"] for r, on in zip(measured, front) if on}
-    head = ("<tr><th>model</th><th>BRDF error</th><th>image relMSE</th><th>FLIP</th>"
-            "<th>cost ×</th><th>fit s</th><th>parameters</th><th>XML</th></tr>")
-    body = []
-    for r in ok:
-        params = ", ".join(f"{k}={_short(v)}" for k, v in r["parameters"].items()
-                           if k not in ("type", "mode"))
-        mark = " ★" if r["model"] in front_models else ""
-        body.append(f"<tr><td>{html.escape(r['model'])}{mark}</td><td>{_fmt(r['brdf_error'], '.4g')}</td>"
-                    f"<td>{_fmt(r.get('image_relmse'))}</td><td>{_fmt(r.get('image_flip'))}</td>"
-                    f"<td>{_fmt(r.get('cost_ratio'), '.2f')}</td><td>{_fmt(r['seconds'], '.1f')}</td>"
-                    f"<td class=p>{html.escape(params)}</td>"
-                    f'<td><a href="{r["xml"]}">xml</a></td></tr>')
-    for r in failed:
-        body.append(f"<tr><td>{html.escape(r['model'])}</td><td colspan=7>FAILED: "
-                    f"{html.escape(r['error'])}</td></tr>")
-    parts.append(f"<table>{head}{''.join(body)}</table>")
-    noise = [r["image_noise_relmse"] for r in ok if r.get("image_noise_relmse") is not None]
+    body = [_row(r, front, equals) for r in ok]
+    body += [f"<tr><td></td><td>{html.escape(r['model'])}</td><td colspan=12>FAILED: "
+             f"{html.escape(r['error'])}</td></tr>" for r in failed]
+    parts.append(f"<table>{HEAD}{''.join(body)}</table>")
+    if ok and ok[0].get("target_albedo"):
+        parts.append(f"<p>The target's albedo (max channel): "
+                     f"{_albedo(ok[0]['target_albedo']).replace('<br>', ', ')}. ")
+    noise = [r["image_noise_flip"] for r in ok if r.get("image_noise_flip") is not None]
     if noise:
-        parts.append(f"<p>Noise floor of the image relMSE (the target against itself, another "
-                     f"seed): {_fmt(float(np.median(noise)))}. ★: on the Pareto front.</p>")
-    if any(r.get("images") is not None for r in ok):
-        cells = [f'<figure><img src="{name}.png"><figcaption>target</figcaption></figure>']
-        cells += [f'<figure><img src="{file_stem(r)}.png"><figcaption>{html.escape(r["model"])}'
-                  f"<br>{_fmt(r['brdf_error'], '.3g')}</figcaption></figure>"
-                  for r in ok if r.get("images") is not None]
+        parts.append(f"Noise floor (the target against itself at another seed): FLIP "
+                     f"{_fmt(noise[0])}, relMSE {_fmt(ok[0].get('image_noise_relmse'))}. "
+                     "★: on the Pareto front.</p>")
+    if any(r.get("renders") for r in ok):
+        cells = [f'<figure><img src="{name}.jpg"><figcaption>target</figcaption></figure>']
+        cells += [f'<figure><img src="{r["renders"]}"><figcaption>{r["rank"]}. '
+                  f"{html.escape(r['model'])}, FLIP {_fmt(r.get('image_flip'), '.3f')}"
+                  "</figcaption></figure>" for r in ok if r.get("renders")]
         parts.append(f'<div class="renders">{"".join(cells)}</div>')
     if ok and "slices" in ok[0]:
-        shown = [r for r in ok if r["model"] in front_models] or ok[:4]
-        slice_plot(os.path.join(out, f"{name}__slices.png"), rows[0]["target"], ok[0], shown)
+        plots.slice_plot(os.path.join(out, f"{name}__slices.png"), rows[0]["target"], ok[0], ok)
         parts.append(f'<img src="{name}__slices.png" alt="lobe slices" class="wide">')
     return "\n".join(parts)
 
@@ -205,30 +223,36 @@ def _short(v) -> str:
     return str(v)
 
 
-def _html(sections: list[str], settings, command: str) -> str:
-    s = settings
-    return f"""<!DOCTYPE html>
-<html><head><meta charset="utf-8"><title>mi-brdfs fit</title>
-<style>
-body {{ font-family: sans-serif; margin: 2em; }}
-table {{ border-collapse: collapse; font-size: 0.85em; margin: 1em 0; }}
-td, th {{ border: 1px solid #ccc; padding: 2px 6px; text-align: right; }}
-td:first-child, td.p {{ text-align: left; }}
-td.p {{ font-size: 0.85em; max-width: 40em; }}
-.renders {{ display: flex; flex-wrap: wrap; gap: 4px; }}
-figure {{ margin: 0; text-align: center; font-size: 0.7em; }}
-.renders img {{ width: 160px; image-rendering: pixelated; }}
-img.wide {{ max-width: 100%; }}
-</style></head><body>
-<h1>mi-brdfs fit</h1>
-<p><code>{html.escape(command)}</code></p>
-<p>Each course model (hdr mode) fitted to each target by Adam from {s.starts} starts,
-{s.steps} steps, on the <b>{s.metric}</b> metric's direction pairs ({s.viewers[0]}×{s.viewers[1]}
-viewers; per viewer {s.uniform[0]}×{s.uniform[1]} uniform lights and {s.lobe} mirror-guided ones
-per roughness). BRDF error: 0 identical, 1 a black BSDF's error. Images: a sphere under an
-environment map and a key light, {s.res}² pixels, {s.spp} spp, both at the same seed;
-render cost: the model's render time over the target's, measured side by side
-({s.rounds} rounds). See <code>docs/guide/fit.md</code>.</p>
-{''.join(sections)}
-</body></html>
+FIT_CSS = """
+table { font-size: 0.8em; }
+td:nth-child(2), td.p { text-align: left; }
+td.p { font-size: 0.85em; max-width: 36em; }
+.verdict { font-weight: bold; }
+.over { color: #b00; }
+.renders { display: flex; flex-wrap: wrap; gap: 6px; }
+figure { text-align: center; font-size: 0.7em; }
+.renders img { height: 96px; }
+img.wide { max-width: 100%; }
 """
+
+
+def _html(sections: list[str], settings, command: str) -> str:
+    """The page (the project's shared builder, :mod:`..pages`): the command,
+    how the fits were made and measured, then a section per target."""
+    from .. import pages
+    from .scene import VIEWS
+    s = settings
+    about = f"""<p><code>{html.escape(command)}</code></p>
+<p>Each course model (hdr mode) fitted to each target on the <b>{s.objective}</b>-compressed
+values of the <b>{s.metric}</b> metric's direction pairs ({s.viewers[0]}×{s.viewers[1]} viewers;
+per viewer {s.uniform[0]}×{s.uniform[1]} uniform lights and {s.lobe} mirror-guided ones per
+roughness): {s.scan} candidate shapes with their colours by least squares, the best {s.starts}
+refined by Levenberg-Marquardt. Ranked by FLIP, the mean over the views
+({", ".join(VIEWS)}: a sphere, {s.res}² pixels, {s.spp} spp, model and target at the same seed);
+FLIP within {rank.TIE_FLIP} of the best counts as equal, the cheaper first. BRDF error: 0
+identical, 1 a black BSDF's. Render cost: the model's time over the target's, each in a process
+of its own, until the 90 % interval is within {s.cost_tolerance:.0%} (rounds
+{s.cost_rounds[0]}–{s.cost_rounds[1]}); ops: Dr.Jit operations of a traced eval and sample over
+the target's. See <code>docs/guide/fit.md</code>.</p>
+"""
+    return pages.page("mi-brdfs fit", about + "".join(sections), css=FIT_CSS)

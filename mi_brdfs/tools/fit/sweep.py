@@ -1,18 +1,26 @@
-"""Running the fits of targets × models through a ``concurrent.futures``
-executor: local processes (``-j N``, each task in a worker process started
-with ``spawn``, never ``fork``: a forked Dr.Jit is unsafe) or a Dask
-distributed cluster (``--scheduler ADDRESS``, through the client's
-``concurrent.futures`` executor). Targets × models is embarrassingly
-parallel: each task fits one model to one target and measures it
-(:func:`.task.run`).
+"""Running the fits of targets × models: on local processes (``-j N``, each
+task in a worker process started with ``spawn``, never ``fork``: a forked
+Dr.Jit is unsafe) or on a Dask distributed cluster (``--scheduler ADDRESS``).
+Targets × models is embarrassingly parallel: each task fits one model to one
+target and renders it (:func:`.task.fit_and_measure`). Render costs are
+measured afterwards, on this machine, one at a time (:mod:`.cost`).
 
-Render cost is timed inside each task, the target and the model side by side
-in one process; tasks running at the same time on the same machine share its
-cores, so the ratios are steadiest with ``-j 1`` on a quiet machine.
+On a cluster:
 
-On a Dask cluster every worker needs ``mi_brdfs`` installed (with the same
-versions), and an XML target's files (a measured BSDF's data) at the same
-path as here.
+- the address is checked before anything connects (a protocol Dask knows,
+  HOST:PORT): a malformed one is refused at once;
+- a scheduler that cannot be reached in ``SCHEDULER_TIMEOUT`` seconds, or
+  that has no worker for ``worker_timeout`` seconds (60 by default: before
+  the sweep, or all along it once every worker has left) ends the sweep with
+  one line (:class:`SweepError`);
+- a worker lost mid-sweep is Dask's to handle: the scheduler gives its tasks
+  to another worker. Each task's transitions (``Client.story``) tell when
+  that happened; the record then has ``reruns`` (how many times its worker
+  was lost) and ``worker`` (host:pid of the process that finished it), and
+  the report says so.
+
+Every worker needs ``mi_brdfs`` installed (with the same versions), and an
+XML target's files (a measured BSDF's data) at the same path as here.
 """
 from __future__ import annotations
 
@@ -25,9 +33,12 @@ import time
 from typing import Callable, Iterator
 
 from . import models as M, targets as T
-from .task import Settings, run as run_task
+from .task import Settings, fit_and_measure
 
 SCHEDULER_TIMEOUT = 10.0       # seconds to reach a Dask scheduler
+WORKER_TIMEOUT = 60.0          # seconds with no worker before a cluster sweep gives up
+POLL = 0.5                     # seconds between looks at a cluster's tasks
+DEFAULT_PORT = 8786            # Dask's scheduler port
 
 
 class SweepError(RuntimeError):
@@ -53,72 +64,169 @@ def local_executor(jobs: int) -> Iterator[cf.Executor]:
         pool.shutdown(wait=True, cancel_futures=True)
 
 
-def connect(address: str):
-    """A Dask distributed client for ``address``; SweepError if Dask is not
-    installed or the scheduler cannot be reached."""
+# ----------------------------------------------------------------------------
+#  A Dask cluster
+# ----------------------------------------------------------------------------
+
+def check_address(address: str) -> None:
+    """SweepError unless ``address`` is PROTOCOL://HOST:PORT (or HOST:PORT)
+    with a protocol Dask has; nothing is connected."""
+    from distributed.comm import parse_address
+    from distributed.comm.addressing import parse_host_port
+    from distributed.comm.registry import backends
+    valid = [b for b in backends if b != "inproc"]
+    example = f"e.g. tcp://HOST:{DEFAULT_PORT}"
+    try:
+        protocol, location = parse_address(address)
+    except ValueError as error:
+        raise SweepError(f"--scheduler {address}: not an address ({error}; {example})") from None
+    if protocol not in valid:
+        raise SweepError(f"--scheduler {address}: unknown protocol {protocol!r}; valid: "
+                         f"{', '.join(valid)} ({example})")
+    if protocol != "ucx":
+        try:
+            host, port = parse_host_port(location, DEFAULT_PORT)
+        except ValueError:
+            host, port = "", 0
+        if not host or not 0 < port < 65536:
+            raise SweepError(f"--scheduler {address}: {location!r} is not HOST:PORT ({example})")
+
+
+def connect(address: str, worker_timeout: float = WORKER_TIMEOUT):
+    """A Dask client for ``address`` with at least one worker; SweepError (one
+    line) if Dask is missing, the address malformed, the scheduler out of
+    reach or without a worker for ``worker_timeout`` seconds."""
     try:
         import distributed
     except ModuleNotFoundError:
         raise SweepError("--scheduler needs Dask: pip install 'mi_brdfs[dask]'") from None
+    check_address(address)
     try:
-        return distributed.Client(address, timeout=SCHEDULER_TIMEOUT, set_as_default=False)
+        client = distributed.Client(address, timeout=SCHEDULER_TIMEOUT, set_as_default=False)
     except (OSError, TimeoutError, ValueError) as error:
         detail = " ".join(str(error).split()) or type(error).__name__
         raise SweepError(f"--scheduler {address}: cannot reach the Dask scheduler "
                          f"({detail})") from None
-
-
-@contextlib.contextmanager
-def dask_executor(address: str) -> Iterator[cf.Executor]:
-    client = connect(address)
     try:
-        yield client.get_executor(pure=False)
-    finally:
+        client.wait_for_workers(1, timeout=worker_timeout)
+    except (TimeoutError, OSError):
         client.close()
+        raise SweepError(f"--scheduler {address}: no worker joined the scheduler in "
+                         f"{worker_timeout:g} s (start one: dask worker {address})") from None
+    return client
 
 
-def sweep(targets: list[T.Target], models: list[M.Model], settings: Settings,
-          executor: cf.Executor, show: Callable[[int, int, float, dict], None] | None = None
-          ) -> list[dict]:
-    """Every target × model through ``executor``; records in (target, model)
-    order. ``show(done, total, elapsed, record)`` after each task."""
-    tasks = [(t, m) for t in targets for m in models]
-    start = time.perf_counter()
-    futures = {executor.submit(run_task, t, m, settings): i for i, (t, m) in enumerate(tasks)}
-    records: list[dict | None] = [None] * len(tasks)
+def lost_workers(client, key) -> int:
+    """How many times the task ``key`` was taken back from a worker that left
+    (the scheduler's transitions processing -> released on worker clean-up)."""
     try:
-        for done, future in enumerate(cf.as_completed(futures), 1):
+        story = client.story(key)
+    except Exception:                   # an old scheduler without stories: unknown, not lost
+        return 0
+    return sum(1 for s in story if len(s) > 4 and s[0] == "scheduler" and s[2] == "processing"
+               and s[3] == "released" and "worker-cleanup" in str(s[5] if len(s) > 5 else s[4]))
+
+
+def dask_sweep(client, address: str, tasks: list, settings: Settings, collect,
+               worker_timeout: float = WORKER_TIMEOUT) -> None:
+    """Every task on the cluster; ``collect(i, record)`` as each finishes."""
+    futures = [client.submit(fit_and_measure, t, m, settings, pure=False) for t, m in tasks]
+    pending = dict(enumerate(futures))
+    alone_since = None
+    try:
+        while pending:
+            finished = [i for i, f in pending.items() if f.done()]
+            for i in finished:
+                f = pending.pop(i)
+                try:
+                    record = f.result()
+                except Exception as error:          # the task itself could not run
+                    record = failed(tasks[i], f"worker failed: {_line(error)}")
+                record["reruns"] = lost_workers(client, f.key)
+                collect(i, record)
+            if finished or not pending:
+                continue
+            if client.nthreads():
+                alone_since = None
+            elif alone_since is None:
+                alone_since = time.monotonic()
+            elif time.monotonic() - alone_since > worker_timeout:
+                raise SweepError(f"--scheduler {address}: no worker for {worker_timeout:g} s "
+                                 f"({len(tasks) - len(pending)} of {len(tasks)} fits done)")
+            time.sleep(POLL)
+    finally:
+        for f in pending.values():
+            f.cancel()
+
+
+# ----------------------------------------------------------------------------
+#  The sweep
+# ----------------------------------------------------------------------------
+
+def _line(error: BaseException) -> str:
+    from ..errors import one_line
+    return one_line(error)
+
+
+def failed(task, message: str) -> dict:
+    t, m = task
+    return {"target": t.spec, "model": m.name, "plugin": m.plugin, "error": message}
+
+
+def local_sweep(executor: cf.Executor, tasks: list, settings: Settings, collect) -> None:
+    futures = {executor.submit(fit_and_measure, t, m, settings): i for i, (t, m) in enumerate(tasks)}
+    try:
+        for future in cf.as_completed(futures):
             i = futures[future]
             try:
                 record = future.result()
             except Exception as error:             # a worker that died, not a failed fit
-                from ..errors import one_line
-                t, m = tasks[i]
-                record = {"target": t.spec, "model": m.name, "plugin": m.plugin,
-                          "error": f"worker failed: {one_line(error)}"}
-            record["target_name"] = tasks[i][0].name
-            records[i] = record
-            if show:
-                show(done, len(tasks), time.perf_counter() - start, record)
+                record = failed(tasks[i], f"worker failed: {_line(error)}")
+            collect(i, record)
     except BaseException:
         for f in futures:
             f.cancel()
         raise
+
+
+def run_fits(tasks: list[tuple[T.Target, M.Model]], settings: Settings, jobs: int = 1,
+             scheduler: str | None = None, show=None, client=None,
+             worker_timeout: float = WORKER_TIMEOUT, total: int | None = None,
+             start: float | None = None) -> list[dict]:
+    """Every (target, model) task, on local processes or on the Dask scheduler
+    at ``scheduler`` (``client``: one already connected); records in task
+    order. ``show(done, total, elapsed, record)`` after each task (``total``:
+    the steps of the whole run, if more than the fits; ``start``: its
+    ``time.perf_counter()`` at the start of the run)."""
+    records: list[dict | None] = [None] * len(tasks)
+    start = time.perf_counter() if start is None else start
+
+    def collect(i: int, record: dict) -> None:
+        record["target_name"] = tasks[i][0].name
+        records[i] = record
+        if show:
+            show(sum(r is not None for r in records), total or len(tasks),
+                 time.perf_counter() - start, record)
+
+    if scheduler:
+        own = client is None
+        client = client or connect(scheduler, worker_timeout)
+        try:
+            dask_sweep(client, scheduler, tasks, settings, collect, worker_timeout)
+        finally:
+            if own:
+                client.close()
+    else:
+        with local_executor(jobs) as executor:
+            local_sweep(executor, tasks, settings, collect)
     return [r for r in records if r is not None]
 
 
-def run(targets: list[T.Target], models: list[M.Model], settings: Settings, jobs: int = 1,
-        scheduler: str | None = None, show=None) -> list[dict]:
-    """The sweep on local processes, or on the Dask scheduler at ``scheduler``."""
-    context = dask_executor(scheduler) if scheduler else local_executor(jobs)
-    with context as executor:
-        return sweep(targets, models, settings, executor, show)
-
-
 def progress_printer(label: str, stream=None, enabled: bool = True, verbose: bool = False):
-    """``show`` for :func:`sweep`: a bar on a terminal, plain lines in a log."""
+    """``show`` for :func:`run_fits` and the cost measurements (a step: one fit,
+    or one model's cost): a bar on a terminal, plain lines in a log."""
     from ..progress import Progress
-    bar = Progress(label, stream=stream, enabled=enabled, unit="fits")
+    bar = Progress(label, stream=stream, enabled=enabled, unit="steps")
     out = stream if stream is not None else sys.stderr
 
     def show(done: int, total: int, elapsed: float, record: dict) -> None:
@@ -135,9 +243,16 @@ def summary(record: dict) -> str:
     head = f"{record['target']} × {record['model']}"
     if "error" in record:
         return f"{head}: FAILED: {record['error']}"
+    if "cost_rounds" in record or "cost_error" in record:
+        if "cost_error" in record:
+            return f"{head}: cost not measured: {record['cost_error']}"
+        return (f"{head}: cost {record['cost_ratio']:.2f}x ({record['cost_low']:.2f}-"
+                f"{record['cost_high']:.2f}, {record['cost_rounds']} rounds), "
+                f"{record['ops_ratio']:.2f}x the operations")
     parts = [f"brdf error {record['brdf_error']:.4g}"]
-    if record.get("image_relmse") is not None:
-        parts += [f"image relMSE {record['image_relmse']:.3g}", f"FLIP {record['image_flip']:.3g}",
-                  f"cost {record['cost_ratio']:.2f}x"]
+    if record.get("image_flip") is not None:
+        parts += [f"FLIP {record['image_flip']:.3g}", f"image relMSE {record['image_relmse']:.3g}"]
+    if record.get("reruns"):
+        parts.append(f"re-run after its worker was lost ({record['reruns']}x)")
     parts.append(f"{record['seconds']:.1f} s")
     return f"{head}: " + ", ".join(parts)

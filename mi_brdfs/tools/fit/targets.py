@@ -15,9 +15,12 @@ BSDF's data, a texture) are resolved relative to the XML's folder, which must
 then exist at the same path on the workers.
 
 Targets are checked before any work (:func:`check`): the file or shorthand
-must load as a BSDF, reflect light in ``eval`` and have no delta lobe (a
-perfectly smooth conductor or coating: ``eval`` never sees it, no model fitted
-to ``eval`` could represent it; give the rough plugin a small ``alpha``).
+must load as a BSDF with no delta lobe (a perfectly smooth conductor or
+coating: ``eval`` never sees it, no model fitted to ``eval`` could represent
+it; give the rough plugin a small ``alpha``), give finite values, and
+reflect light (a black target is refused: every model would fit it, and its
+errors, relative to its own brightness, are 0/0). A target given twice is
+fitted once (:func:`unique`).
 """
 from __future__ import annotations
 
@@ -177,6 +180,20 @@ def parse(specs: list[str]) -> list[Target]:
     return targets
 
 
+def unique(targets: list[Target]) -> tuple[list[Target], list[str]]:
+    """The targets without repeats (the same shorthand values, or the same
+    XML), and the specs left out."""
+    kept, seen, dropped = [], set(), []
+    for t in targets:
+        key = t.xml if t.xml is not None else repr(sorted(t.as_dict().items(), key=lambda kv: kv[0]))
+        if key in seen:
+            dropped.append(t.spec)
+        else:
+            seen.add(key)
+            kept.append(t)
+    return kept, dropped
+
+
 def _short(value) -> str:
     if isinstance(value, tuple):
         return "_".join(f"{v:g}" for v in value)
@@ -212,5 +229,33 @@ def check(target: Target) -> None:
             raise TargetError(f"target {target.spec}: it has a delta (perfectly smooth) lobe, "
                               "which eval() never sees and no fitted model can represent; "
                               "use the rough plugin with a small alpha (e.g. roughconductor)")
+        check_values(target.spec, bsdf)
     finally:
         del bsdf
+
+
+def check_values(spec: str, bsdf) -> None:
+    """TargetError if ``eval`` is not finite on the quick metric's pairs, or
+    if the target reflects no light (0 at every pair, and a directional
+    albedo of 0 at 0°, 45° and 80° by its own sampling)."""
+    import drjit as dr
+    import mitsuba as mi
+    import numpy as np
+
+    from ..._jit import from_numpy
+    from .effective import albedo
+    from .metric import pairs
+    from .optimise import values_of
+    p = pairs("cosine", (8, 4), (8, 8), 16)
+    si = dr.zeros(mi.SurfaceInteraction3f, len(p.wi))
+    si.wi = from_numpy(mi.Vector3f, p.wi.T)
+    si.uv = mi.Point2f(0.5, 0.5)
+    values = values_of(bsdf, si, from_numpy(mi.Vector3f, p.wo.T))
+    bad = int(np.sum(~np.isfinite(values).all(axis=1)))
+    if bad:
+        raise TargetError(f"target {spec}: its eval is not finite (NaN or infinite) at {bad} of "
+                          f"{len(values)} direction pairs")
+    reflected = np.array(albedo(bsdf, (0.0, 45.0, 80.0), samples=4096))
+    if not (reflected > 0).any() and not (values > 0).any():
+        raise TargetError(f"target {spec}: it is black (it reflects no light at any direction "
+                          "pair tried, nor in 4096 sampled directions at 0°, 45° and 80°)")

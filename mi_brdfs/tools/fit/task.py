@@ -1,200 +1,88 @@
 """One fit, target × model, as a worker runs it (in a process of its own or
-on a Dask worker): the model's parameters fitted to the target's values at
-the metric's direction pairs by Adam (Dr.Jit's AD) from several starts, then
-renders and render cost in the standard scene (:mod:`.scene`).
-
-The optimisation: the unit coordinates y of the free parameters
-(:mod:`.models`) are Adam's variables; each step sets the plugin's public
-parameters (``mi.traverse`` keys) to their values, evaluates ``eval`` at every
-pair, and minimises the relative squared error E²/E²(0) of the metric. The
-learning rate decays geometrically from ``lr`` to ``lr_end`` over the steps;
-y is clipped to [0, 1] after each. Every start runs the same schedule; the
-start with the lowest final error wins.
+on a Dask worker): the model fitted to the target (:mod:`.optimise`), its
+effective parameters and directional albedo (:mod:`.effective`), its lobe
+slices, and its renders in the standard views against the target's
+(:mod:`.scene`: FLIP and relMSE per view). The render cost is measured
+afterwards, one process at a time (:mod:`.cost`): timings taken while other
+fits run would measure the load.
 """
 from __future__ import annotations
 
-import math
+import os
+import socket
 import time
 import traceback
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
-from ..._jit import from_numpy
+from ..settings import Settings as SettingsBase
+from . import optimise
+from .optimise import fit_model, problem  # noqa: F401  (used as task.* by tools/explore)
 
 SLICE_ANGLES = (0.0, 30.0, 60.0, 80.0)     # viewer angles of the lobe slices (degrees)
 SLICE_POINTS = 181
-HOLD = 0.5                                  # the share of the steps at the full learning rate
 
 
 @dataclass(frozen=True)
-class Settings:
+class Settings(SettingsBase):
     """How much work one fit does (:data:`QUICK`, :data:`FULL`)."""
-    metric: str = "cosine"
+    metric: str = "cosine"                   # the reported BRDF error (metric.METRICS)
+    objective: str = "cbrt"                  # what the fit minimises (metric.OBJECTIVES)
     viewers: tuple[int, int] = (12, 6)       # viewer strata (cos θ, φ)
     uniform: tuple[int, int] = (12, 12)      # uniform light strata per viewer
     lobe: int = 36                           # mirror-guided lights per viewer and roughness
-    starts: int = 3
-    steps: int = 250
-    lr: float = 0.05
-    lr_end: float = 1e-3
-    res: int = 128                           # the standard scene
+    scan: int = 48                           # candidate settings scanned (optimise.py)
+    starts: int = 3                          # the best candidates refined
+    steps: int = 150                         # residual evaluations per refinement, at most
+    res: int = 128                           # the standard views
     spp: int = 64
-    rounds: int = 4                          # side-by-side timing rounds
-    render: bool = True                      # renders, image error and cost (else: the fit only)
-
-    def replace(self, **changes) -> "Settings":
-        return Settings(**{**asdict(self), **changes})
+    render: bool = True                      # renders and image errors (else: the fit only)
+    cost: bool = True                        # render cost (mi_brdfs.tools.fit.cost)
+    cost_rounds: tuple[int, int] = (6, 40)   # cost: at least, at most this many rounds
+    cost_tolerance: float = 0.05             # cost: until the 90 % interval's high/low <= 1.05
 
 
 FULL = Settings()
-QUICK = Settings(viewers=(8, 4), uniform=(8, 8), lobe=16, starts=2, steps=120, res=48, spp=16,
-                 rounds=2)
+QUICK = Settings(viewers=(8, 4), uniform=(8, 8), lobe=16, res=48,
+                 spp=16, cost_rounds=(3, 6))
 
 
-# ----------------------------------------------------------------------------
-#  Evaluating BSDFs at the pairs
-# ----------------------------------------------------------------------------
-
-@dataclass
-class Problem:
-    """The pairs as Dr.Jit arrays and the target's values there."""
-    si: object
-    wo: object
-    weight: object           # mi.Float
-    target: object           # mi.Color3f (eval of the target)
-    norm: float              # Σ w ‖target‖²: E²(0)
-    arrays: dict = field(default_factory=dict)     # NumPy copies (weight, target)
-
-
-def problem(target_bsdf, pairs) -> Problem:
-    import drjit as dr
-    import mitsuba as mi
-    n = len(pairs.wi)
-    si = dr.zeros(mi.SurfaceInteraction3f, n)
-    si.wi = from_numpy(mi.Vector3f, pairs.wi.T)
-    si.uv = mi.Point2f(0.5, 0.5)
-    wo = from_numpy(mi.Vector3f, pairs.wo.T)
-    values = values_of(target_bsdf, si, wo)
-    finite = np.isfinite(values).all(axis=1)
-    values = np.where(finite[:, None], values, 0.0)
-    weight = np.where(finite, pairs.weight, 0.0)
-    norm = float(np.sum(weight * np.sum(values ** 2, axis=1)))
-    return Problem(si, wo, from_numpy(mi.Float, weight), from_numpy(mi.Color3f, values.T),
-                   norm, {"weight": weight, "target": values})
-
-
-def values_of(bsdf, si, wo) -> np.ndarray:
-    """eval at the pairs as (N, 3) float64."""
-    import mitsuba as mi
-    value = np.array(bsdf.eval(mi.BSDFContext(), si, wo), dtype=np.float64)
-    return value.T if value.ndim == 2 else np.repeat(value[:, None], 3, axis=1)
-
-
-# ----------------------------------------------------------------------------
-#  The optimisation
-# ----------------------------------------------------------------------------
-
-def fit_model(model, prob: Problem, settings: Settings, log=None) -> dict:
-    """Fit ``model`` (a :class:`.models.Model`) to ``prob``; returns the fitted
-    properties, the BRDF error and what each start reached."""
-    import drjit as dr
-    import mitsuba as mi
-
-    from ...bsdfs import BY_NAME
-    from . import models as M
-    cls = BY_NAME[model.plugin]
-    defaults = {p.name: p.default for p in cls.PARAMS}
-    probe = mi.load_dict(model.properties())
-    free = M.free_parameters(cls, list(mi.traverse(probe).keys()))
-    del probe
-    points = M.starts(free, defaults, settings.starts)
-    results = []
-    for y0 in points:
-        unit = M.split(free, y0)
-        props = model.properties()
-        props.update({f.name: (list(f.value(np.array(unit[f.name]))) if f.colour
-                               else float(f.value(unit[f.name]))) for f in free})
-        bsdf = mi.load_dict(M.load_dict(props))
-        params = mi.traverse(bsdf)
-        opt = mi.ad.Adam(lr=settings.lr)
-        for f in free:
-            opt[f.key] = (mi.Color3f(*map(float, unit[f.name])) if f.colour
-                          else mi.Float(float(unit[f.name])))
-        history = []
-        steps = settings.steps                  # 0: the start as it is (no descent)
-        for it in range(steps):
-            opt.set_learning_rate(learning_rate(settings, it / steps))
-            for f in free:
-                params[f.key] = dr.clip(f.value(opt[f.key]), f.lo, f.hi)
-            params.update()
-            value = bsdf.eval(mi.BSDFContext(), prob.si, prob.wo)
-            loss = dr.sum(prob.weight * dr.sum(dr.square(value - prob.target), axis=0),
-                          axis=None) / prob.norm
-            dr.backward(loss)
-            opt.step()
-            for f in free:
-                opt[f.key] = dr.clip(opt[f.key], 0.0, 1.0)
-            if it % 25 == 0 or it == steps - 1:
-                history.append(float(loss.array[0]))
-        fitted = {}
-        for f in free:
-            v = np.array(dr.detach(dr.clip(f.value(opt[f.key]), f.lo, f.hi)), dtype=np.float64).ravel()
-            fitted[f.name] = [float(c) for c in v[:3]] if f.colour else float(v[0])
-        for f in free:
-            params[f.key] = (mi.Color3f(*fitted[f.name]) if f.colour else mi.Float(fitted[f.name]))
-        params.update()
-        error = relative(values_of(bsdf, prob.si, prob.wo), prob)
-        results.append({"start": [float(v) for v in y0], "error": error, "history": history,
-                        "parameters": {**model.properties(), **fitted}})
-        if log:
-            log(f"{model.name}: start {len(results)}/{len(points)}: error {error:.4g}")
-        del bsdf, params, opt
-    best = min(results, key=lambda r: r["error"] if math.isfinite(r["error"]) else math.inf)
-    return {"parameters": best["parameters"], "brdf_error": best["error"],
-            "starts": [{"error": r["error"], "history": r["history"]} for r in results]}
-
-
-def learning_rate(settings: Settings, t: float) -> float:
-    """lr for the first HOLD of the steps (t in [0, 1)), then geometrically down to lr_end."""
-    if t < HOLD:
-        return settings.lr
-    return settings.lr * (settings.lr_end / settings.lr) ** ((t - HOLD) / (1.0 - HOLD))
-
-
-def relative(values: np.ndarray, prob: Problem) -> float:
-    w, t = prob.arrays["weight"], prob.arrays["target"]
-    values = np.where(np.isfinite(values), values, np.inf)
-    num = float(np.sum(w * np.sum((values - t) ** 2, axis=1)))
-    return math.sqrt(num / prob.norm) if prob.norm > 0 else math.nan
-
-
-def slices(bsdf) -> list[list[float]]:
-    """eval (channel mean) in the plane of incidence at each SLICE_ANGLES viewer."""
-    from ..analysis import plane_of_incidence
-    return [plane_of_incidence(bsdf, a, SLICE_POINTS)[1].tolist() for a in SLICE_ANGLES]
+def slices(bsdf) -> list[list[list[float]]]:
+    """eval per channel in the plane of incidence at each SLICE_ANGLES viewer:
+    [angle][channel][point]."""
+    from ..analysis import eval_at_viewer
+    theta = np.radians(np.linspace(-89.5, 89.5, SLICE_POINTS))
+    wo = np.stack([np.sin(theta), np.zeros_like(theta), np.cos(theta)], axis=1)
+    return [eval_at_viewer(bsdf, a, wo).T.tolist() for a in SLICE_ANGLES]
 
 
 # ----------------------------------------------------------------------------
 #  One task
 # ----------------------------------------------------------------------------
 
-def run(target, model, settings: Settings, pairs=None) -> dict:
+def fit_and_measure(target, model, settings: Settings, pairs=None) -> dict:
     """Fit ``model`` to ``target`` (a :class:`.targets.Target`) and measure it.
     Never raises: a failure is returned as a record with an ``error`` message."""
     try:
-        return _run(target, model, settings, pairs)
+        return _fit_and_measure(target, model, settings, pairs)
     except Exception as error:                     # reported in the record, not lost
         from ..errors import one_line
         return {"target": target.spec, "model": model.name, "plugin": model.plugin,
-                "error": one_line(error), "traceback": traceback.format_exc()}
+                "error": one_line(error), "traceback": traceback.format_exc(),
+                "worker": worker_name()}
 
 
-def _run(target, model, settings: Settings, pairs) -> dict:
+def worker_name() -> str:
+    """host:pid of the process that ran a task (a re-run shows another)."""
+    return f"{socket.gethostname()}:{os.getpid()}"
+
+
+def _fit_and_measure(target, model, settings: Settings, pairs) -> dict:
     import mi_brdfs  # noqa: F401  (LLVM, the variant, the plugins: in every worker)
     import mitsuba as mi
 
-    from . import metric, models as M, scene
+    from . import effective, metric, models as M, scene
     if mi.variant() != "llvm_ad_rgb":
         mi.set_variant("llvm_ad_rgb")
         mi_brdfs.register()
@@ -202,43 +90,56 @@ def _run(target, model, settings: Settings, pairs) -> dict:
     if pairs is None:
         pairs = metric.pairs(settings.metric, settings.viewers, settings.uniform, settings.lobe)
     target_bsdf = target.load()
-    prob = problem(target_bsdf, pairs)
+    prob = optimise.problem(target_bsdf, pairs, settings.objective)
     if not prob.norm > 0:
         raise ValueError(f"target {target.spec} reflects no light at the metric's pairs")
     target_slices = slices(target_bsdf)
+    target_albedo = effective.albedo(target_bsdf)
     del target_bsdf
-    fit = fit_model(model, prob, settings)
+    fit = optimise.fit_model(model, prob, settings)
     fitted = mi.load_dict(M.load_dict(fit["parameters"]))
     model_slices = slices(fitted)
+    model_albedo = effective.albedo(fitted)
     del fitted, prob
-    seconds = time.perf_counter() - start
     record = {"target": target.spec, "target_name": target.name, "model": model.name,
               "plugin": model.plugin, "parameters": fit["parameters"],
               "brdf_error": fit["brdf_error"], "metric": settings.metric,
+              "objective": settings.objective, "objective_error": fit["objective"],
               "image_relmse": None, "image_flip": None, "image_noise_relmse": None,
-              "cost_ratio": None, "seconds": seconds, "starts": fit["starts"],
+              "image_noise_flip": None, "cost_ratio": None, "cost_low": None,
+              "cost_high": None, "ops_ratio": None,
+              "effective": effective.parameters(model.plugin, fit["parameters"]),
+              "albedo": model_albedo, "target_albedo": target_albedo,
+              "starts": fit["starts"], "worker": worker_name(),
               "slices": {"angles": list(SLICE_ANGLES), "target": target_slices,
                          "model": model_slices}}
     if settings.render:
         scene.release()
-        record.update(measure(target, fit["parameters"], settings))
+        record.update(images(target, fit["parameters"], settings))
+    record["seconds"] = time.perf_counter() - start
     return record
 
 
-def measure(target, properties: dict, settings: Settings) -> dict:
-    """Image error and render cost of the fitted model against the target."""
+def images(target, properties: dict, settings: Settings) -> dict:
+    """The fitted model's renders against the target's in every view: FLIP
+    and relMSE over the sphere's pixels per view, and their means."""
     from .. import compare
     from . import models as M, scene
-    # Factories: each scene gets a BSDF of its own, released with it.
-    result = scene.side_by_side(lambda: target.as_dict() if target.xml is None else target.load(),
-                                lambda: M.load_dict(properties), settings.res,
-                                settings.spp, settings.rounds)
-    images = result["images"]
-    t, m = images["target"], images["model"]
-    metrics = compare.metrics(t, m, with_flip=True, flip_mode="hdr")
-    noise = compare.metrics(t, images["target_seed1"], with_flip=False)
-    return {"image_relmse": metrics["relmse"], "image_flip": metrics["flip"],
-            "image_noise_relmse": noise["relmse"], "cost_ratio": result["cost_ratio"],
-            "render_seconds": {k: v for k, v in result["times"].items()},
-            "images": {"target": t.astype(np.float32), "model": m.astype(np.float32)},
-            "render": {"res": settings.res, "spp": settings.spp, "seed": 0}}
+    mask = scene.sphere_mask(settings.res)
+    reference = scene.target_views(target, settings.res, settings.spp, seed=0)
+    again = scene.target_views(target, settings.res, settings.spp, seed=1)
+    model = scene.render_views(lambda: M.load_dict(properties), settings.res, settings.spp, 0)
+    views, noise = {}, {}
+    for view in scene.VIEWS:
+        m = compare.metrics(reference[view], model[view], flip_mode="hdr", mask=mask)
+        n = compare.metrics(reference[view], again[view], flip_mode="hdr", mask=mask)
+        views[view] = {"flip": m["flip"], "relmse": m["relmse"]}
+        noise[view] = {"flip": n["flip"], "relmse": n["relmse"]}
+    mean = lambda d, k: float(np.mean([v[k] for v in d.values()]))
+    return {"image_flip": mean(views, "flip"), "image_relmse": mean(views, "relmse"),
+            "image_noise_flip": mean(noise, "flip"), "image_noise_relmse": mean(noise, "relmse"),
+            "image_views": views,
+            "images": {"target": {v: a.astype(np.float32) for v, a in reference.items()},
+                       "model": {v: a.astype(np.float32) for v, a in model.items()}},
+            "render": {"res": settings.res, "spp": settings.spp, "seed": 0,
+                       "views": list(scene.VIEWS)}}

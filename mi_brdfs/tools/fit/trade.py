@@ -1,22 +1,28 @@
 """The speed/accuracy trade across the course models: ``mi-brdfs fit`` over a
 fixed list of materials (:data:`TARGETS`) and the table "which model for
-which material" (:func:`table`). A bench group runs it in one line::
+which material" (:func:`table`). The bench's ``trade`` group runs it in one
+line, and so does ``python -m mi_brdfs.tools.fit.trade -o DIR [--quick] [-j N] [--materials LABEL ...]``
+(the committed ``docs/benchmarks/trade``)::
 
-    records = trade.run(os.path.join(out_dir, "trade"), quick=quick)
+    records = trade.fit_materials(os.path.join(out_dir, "trade"), quick=quick)
 
 which writes the fit report there, with ``trade.md`` (the table) beside
 ``fits.json``. The targets: Mitsuba's ``roughconductor`` in gold, copper and
 aluminium (spectral indices of refraction, through their RGB response in
-``llvm_ad_rgb``) at α 0.1 and 0.3, ``roughplastic`` (a red-brown plastic) at
-α 0.1 and 0.3, ``principled`` as a rough dielectric and as a brass-like
-metal, and ``diffuse``. The conductors and plastics have Mitsuba's default
-distribution (Beckmann); ``principled`` is GGX.
+``llvm_ad_rgb``) at α 0.1 and 0.3 (Beckmann, Mitsuba's default), gold at α
+0.05 and chromium at α 0.15 (GGX), ``roughplastic`` (a red-brown plastic at
+α 0.1 and 0.3, a blue one at α 0.15), ``principled`` as a rough dielectric
+and as a brass-like metal (GGX), ``diffuse``, and brushed aluminium
+(anisotropic GGX, α 0.05 along the tangent and 0.3 across it; the fit adds
+anisotropic Ward and Cook-Torrance for it).
 """
 from __future__ import annotations
 
+import argparse
 import math
 import os
 import statistics
+import sys
 
 PLASTIC = "diffuse_reflectance=[0.6,0.2,0.1]"
 TARGETS = (          # (label, target)
@@ -26,58 +32,149 @@ TARGETS = (          # (label, target)
     ("Cu α0.3", "roughconductor:material=Cu,alpha=0.3"),
     ("Al α0.1", "roughconductor:material=Al,alpha=0.1"),
     ("Al α0.3", "roughconductor:material=Al,alpha=0.3"),
+    ("Au α0.05 GGX", "roughconductor:material=Au,alpha=0.05,distribution=ggx"),
+    ("Cr α0.15 GGX", "roughconductor:material=Cr,alpha=0.15,distribution=ggx"),
     ("plastic α0.1", f"roughplastic:alpha=0.1,{PLASTIC}"),
     ("plastic α0.3", f"roughplastic:alpha=0.3,{PLASTIC}"),
+    ("blue plastic α0.15", "roughplastic:alpha=0.15,diffuse_reflectance=[0.1,0.2,0.6]"),
     ("principled dielectric", "principled:base_color=[0.8,0.25,0.1],roughness=0.4,specular=0.5"),
     ("principled metal", "principled:base_color=[0.9,0.75,0.4],roughness=0.25,metallic=1"),
     ("diffuse", "diffuse:reflectance=[0.7,0.5,0.3]"),
+    ("brushed Al α0.05×0.3 GGX",
+     "roughconductor:distribution=ggx,alpha_u=0.05,alpha_v=0.3,material=Al"),
 )
 
 
-def run(out_dir: str, quick: bool = False, jobs: int = 1, scheduler: str | None = None,
-        show=None, models: list[str] | None = None, targets=TARGETS) -> list[dict]:
+def fit_materials(out_dir: str, quick: bool = False, jobs: int | None = None,
+                  scheduler: str | None = None, show=None, models: list[str] | None = None,
+                  targets=TARGETS, settings=None) -> list[dict]:
     """Fit every model (or ``models``) to every target; the report, with
-    ``trade.md``, goes to ``out_dir`` (a report folder)."""
+    ``trade.md``, goes to ``out_dir`` (a report folder). ``jobs``: fits at
+    once (default: one per core, at most 2; the costs are timed one at a time)."""
     from . import fit
     labels = dict((spec, label) for label, spec in targets)
 
     def write_table(folder: str, records: list[dict]) -> None:
         with open(os.path.join(folder, "trade.md"), "w") as f:
-            f.write(table(records, labels))
+            f.write(subset_note(targets) + table(records, labels))
 
+    jobs = jobs or max(1, min(2, os.cpu_count() or 1))
     return fit([spec for _, spec in targets], out_dir, models, quick=quick, jobs=jobs,
-               scheduler=scheduler, show=show, command="mi_brdfs.tools.fit.trade.run",
-               also=write_table)
+               scheduler=scheduler, show=show, settings=settings,
+               command="mi_brdfs.tools.fit.trade.fit_materials", also=write_table)
+
+
+def subset_note(targets) -> str:
+    """A line saying which of :data:`TARGETS` a partial run left out (empty
+    for the whole sweep), and the command that runs them all."""
+    left = [label for label, spec in TARGETS if spec not in {s for _, s in targets}]
+    if not left:
+        return ""
+    return (f"**A partial run**: {len(targets)} of the {len(TARGETS)} materials; not fitted "
+            f"here: {', '.join(left)}. The whole sweep: "
+            "`python -m mi_brdfs.tools.fit.trade -o docs/benchmarks/trade` "
+            "(or `mi-brdfs bench --group trade`).\n\n")
 
 
 def table(records: list[dict], labels: dict[str, str] | None = None) -> str:
     """"Which model for which material": a Markdown table, one row per model,
-    its median render cost over the targets (× the target's) and, on each
-    target, its BRDF error and the image's FLIP (``0.080 · 0.40``); the
-    lowest BRDF error per target in bold."""
+    its median render cost over the targets (× the target's, with the median
+    of its interval's ends) and its median operation count (× the target's),
+    and on each target its image FLIP and its BRDF error (``0.06 · 0.110``);
+    the first-ranked model per target in bold."""
+    from .models import names
     labels = labels or {}
     specs = list(dict.fromkeys(r["target"] for r in records))
-    models = list(dict.fromkeys(r["model"] for r in records))
+    canonical = {name: i for i, name in enumerate(names())}          # the models' own order
+    models = sorted(dict.fromkeys(r["model"] for r in records),
+                    key=lambda m: canonical.get(m, len(canonical)))
     cell = {(r["target"], r["model"]): r for r in records}
-    best = {}
-    for s in specs:
-        ok = [r for r in records if r["target"] == s and "error" not in r]
-        if ok:
-            best[s] = min(ok, key=lambda r: r["brdf_error"])["model"]
-    head = ["model", "cost ×"] + [labels.get(s, s) for s in specs]
+    head = ["model", "cost × (90 %)", "ops ×"] + [labels.get(s, s) for s in specs]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+
+    def median(m, key):
+        values = [cell[(s, m)].get(key) for s in specs if (s, m) in cell]
+        values = [v for v in values if v is not None and math.isfinite(v)]
+        return statistics.median(values) if values else None
+
     for m in models:
-        costs = [cell[(s, m)].get("cost_ratio") for s in specs if (s, m) in cell]
-        costs = [c for c in costs if c is not None and math.isfinite(c)]
-        row = [f"`{m}`", f"{statistics.median(costs):.2f}" if costs else "–"]
+        c, lo, hi, ops = (median(m, k) for k in ("cost_ratio", "cost_low", "cost_high", "ops_ratio"))
+        row = [f"`{m}`", "–" if c is None else f"{c:.2f} ({lo:.2f}–{hi:.2f})",
+               "–" if ops is None else f"{ops:.2f}"]
         for s in specs:
             r = cell.get((s, m))
             if r is None or "error" in r:
                 row.append("failed" if r else "–")
                 continue
-            text = f"{r['brdf_error']:.3f}"
-            text = f"**{text}**" if best.get(s) == m else text
             flip = r.get("image_flip")
-            row.append(text if flip is None else f"{text} · {flip:.2f}")
+            text = (f"{flip:.2f} · " if flip is not None else "") + f"{r['brdf_error']:.3f}"
+            row.append(f"**{text}**" if r.get("rank") == 1 else text)
         lines.append("| " + " | ".join(row) + " |")
+    return "\n".join(lines) + "\n\n" + answers(records, labels)
+
+
+def answers(records: list[dict], labels: dict[str, str] | None = None) -> str:
+    """Per material: the verdict (:func:`.rank.verdict`), how far the
+    first-ranked fit's FLIP is from the best FLIP of any fit, and for a
+    conductor the largest channel difference between the first-ranked fit's
+    colour at normal incidence and the material's F0."""
+    from . import effective, rank, targets as T
+    labels = labels or {}
+    lines = ["| material | verdict | first-ranked FLIP - best FLIP | conductor: F0 error |",
+             "|---|---|---|---|"]
+    for spec in dict.fromkeys(r["target"] for r in records):
+        mine = [r for r in records if r["target"] == spec]
+        order = rank.ranked(mine)
+        if not order:
+            lines.append(f"| {labels.get(spec, spec)} | every fit failed | – | – |")
+            continue
+        gap = rank.quality(order[0]) - min(rank.quality(r) for r in order)
+        f0 = effective.conductor_f0(T.parse([spec])[0])
+        colour = effective.normal_colour(order[0])
+        error = ("–" if f0 is None or colour is None else
+                 f"{max(abs(a - b) for a, b in zip(colour, f0)):.3f}")
+        lines.append(f"| {labels.get(spec, spec)} | {rank.verdict(mine, rank.target_plugin(spec))} "
+                     f"| {gap:.3f} | {error} |")
     return "\n".join(lines) + "\n"
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m mi_brdfs.tools.fit.trade -o DIR [--quick] [-j N] [--materials LABEL ...]``."""
+    from ..errors import one_line
+    from .sweep import progress_printer
+    p = argparse.ArgumentParser(prog="python -m mi_brdfs.tools.fit.trade",
+                                description="The trade sweep: every course model fitted to "
+                                            "the fixed materials; a fit report with trade.md.")
+    p.add_argument("-o", "--output", required=True,
+                   help="report folder: new, empty, or a previous report")
+    p.add_argument("--quick", action="store_true", help="fewer pairs, pixels and timing rounds")
+    p.add_argument("-j", "--jobs", type=int, default=None, help="fits at once (default: up to 2)")
+    p.add_argument("--materials", nargs="+", metavar="LABEL", default=None,
+                   help="only these materials, by label (default: all): "
+                        + "; ".join(label for label, _ in TARGETS))
+    args = p.parse_args(argv)
+    chosen = TARGETS
+    if args.materials:
+        known = dict(TARGETS)
+        unknown = [m for m in args.materials if m not in known]
+        if unknown:
+            p.exit(1, f"{p.prog}: error: --materials: unknown label {unknown[0]!r}; valid: "
+                      f"{'; '.join(known)}\n")
+        chosen = tuple((m, known[m]) for m in dict.fromkeys(args.materials))
+    show = progress_printer(p.prog)
+    try:
+        records = fit_materials(args.output, quick=args.quick, jobs=args.jobs, show=show,
+                                targets=chosen)
+    except Exception as error:
+        show.close()
+        print(f"{p.prog}: error: {one_line(error)}", file=sys.stderr)
+        return 1
+    show.close()
+    failed = [r for r in records if "error" in r]
+    print(f"{os.path.join(args.output, 'trade.md')}: {len(records) - len(failed)} fits, "
+          f"{len(failed)} failed")
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,261 @@
+"""Render cost: what a fitted model costs against its target, measured so that
+the answer is a property of the model and the scene, not of one noisy run.
+
+**Timed** (:func:`measure_costs`). The target's scene (the ``environment``
+view of :mod:`.scene`) lives in a process of its own, and each model's in
+another (spawned, never forked; one BSDF instance alive in each: Dr.Jit
+traces every live instance at every render). After an untimed render in each
+(it compiles or loads the kernels), the two render in turn — each round one
+timed render of each, the order alternating — and each round gives the
+ratio model time / target time, so that a change of the machine's load
+between rounds cancels. The rounds go on until the 90 % interval of the
+geometric mean of the ratios (Student's t on their logarithms) is within
+``cost_tolerance`` (high/low <= 1.05 by default), at least and at most
+``cost_rounds``. ``cost_ratio`` is that mean, ``cost_low`` and ``cost_high``
+the interval. Only one measurement runs at a time, after every fit: fits
+running beside it would be measured with it.
+
+**Again** (``python -m mi_brdfs.tools.fit.cost REPORT_DIR [--targets N]``):
+the costs of a fit report's fits measured once more and printed beside the
+report's, with whether the two intervals overlap — the spread of the method
+on this machine. It writes nothing.
+
+**Counted** (``ops_ratio``): the Dr.Jit variables one traced ``eval`` and
+one traced ``sample`` create (the bench's count, from Dr.Jit's trace log:
+:func:`..bench.anatomy.variables_created`), relative to the target's: the
+same on every run.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import multiprocessing
+import os
+import statistics
+import sys
+import time
+
+OPS_LANES = 1024           # lanes of the traced calls counted (the count does not depend on it)
+REPLY_SECONDS = 600.0      # a worker that does not answer in this long is given up
+
+
+class CostError(RuntimeError):
+    """A cost worker that failed (its message on one line)."""
+
+
+def _make(spec):
+    """A BSDF from a :class:`.targets.Target` or fitted properties (a dict)."""
+    from . import models as M
+    if isinstance(spec, dict):
+        return M.load_dict(spec)
+    return spec.as_dict() if spec.xml is None else spec.load()
+
+
+def operations(bsdf) -> int:
+    """Dr.Jit variables one traced eval and one traced sample of ``bsdf`` create."""
+    from ..bench.anatomy import variables_created
+    from ..bench.measure import bsdf_call, bsdf_inputs
+    x = bsdf_inputs(OPS_LANES)
+    for method in ("eval", "sample"):
+        bsdf_call(bsdf, method, x)             # the first call may build what later calls reuse
+    return sum(variables_created(lambda m=method: bsdf_call(bsdf, m, x))
+               for method in ("eval", "sample"))
+
+
+def _serve(conn, spec, res: int, spp: int) -> None:
+    """The worker: load the scene, render once untimed, count operations, then
+    time one render per request (its seed) until told to stop (None)."""
+    try:
+        import mi_brdfs  # noqa: F401  (LLVM, the variant, the plugins)
+        import mitsuba as mi
+
+        from . import scene as S
+        scene = mi.load_dict(S.scene_dict(_make(spec), res, S.COST_VIEW), parallel=False)
+        S.render(scene, spp, seed=0)
+        ops = operations(scene.shapes()[0].bsdf())
+        conn.send(("ready", ops))
+        while (seed := conn.recv()) is not None:
+            start = time.perf_counter()
+            S.render(scene, spp, seed=seed)
+            conn.send(("time", time.perf_counter() - start))
+    except Exception as error:                 # reported to the parent on one line
+        from ..errors import one_line
+        conn.send(("error", one_line(error)))
+    finally:
+        conn.close()
+
+
+class Worker:
+    """A process holding one scene (:func:`_serve`)."""
+
+    def __init__(self, spec, res: int, spp: int):
+        context = multiprocessing.get_context("spawn")
+        self.conn, child = context.Pipe()
+        self.process = context.Process(target=_serve, args=(child, spec, res, spp), daemon=True)
+        self.process.start()
+        child.close()
+        self.ops = self._reply("ready")
+
+    def _reply(self, kind: str):
+        if not self.conn.poll(REPLY_SECONDS):
+            raise CostError(f"no answer in {REPLY_SECONDS:.0f} s")
+        try:
+            what, value = self.conn.recv()
+        except EOFError:
+            raise CostError(f"the process ended (exit code {self.process.exitcode})") from None
+        if what == "error":
+            raise CostError(value)
+        return value
+
+    def time(self, seed: int) -> float:
+        self.conn.send(seed)
+        return self._reply("time")
+
+    def close(self) -> None:
+        try:
+            self.conn.send(None)
+        except (BrokenPipeError, OSError):
+            pass
+        self.process.join(timeout=30)
+        if self.process.is_alive():
+            self.process.kill()
+            self.process.join()
+        self.conn.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+def interval(ratios: list[float], confidence: float = 0.90) -> tuple[float, float, float]:
+    """(geometric mean, low, high): Student's t interval on the log ratios."""
+    from scipy.stats import t as student
+    logs = [math.log(r) for r in ratios]
+    mean = statistics.fmean(logs)
+    if len(logs) < 2:
+        return math.exp(mean), 0.0, math.inf
+    half = student.ppf(0.5 + confidence / 2, len(logs) - 1) * statistics.stdev(logs) / math.sqrt(len(logs))
+    return math.exp(mean), math.exp(mean - half), math.exp(mean + half)
+
+
+def compare(target_worker: Worker, model_worker: Worker, rounds: tuple[int, int],
+            tolerance: float) -> dict:
+    """Rounds of one timed render each, alternating which goes first, until
+    the interval is tight (module docstring)."""
+    ratios = []
+    for r in range(rounds[1]):
+        order = (target_worker, model_worker) if r % 2 == 0 else (model_worker, target_worker)
+        seconds = {id(w): w.time(seed=1 + r) for w in order}
+        ratios.append(seconds[id(model_worker)] / seconds[id(target_worker)])
+        mean, low, high = interval(ratios)
+        if len(ratios) >= rounds[0] and high / low <= 1.0 + tolerance:
+            break
+    return {"cost_ratio": mean, "cost_low": low, "cost_high": high, "cost_rounds": len(ratios)}
+
+
+def measure_costs(target, records: list[dict], settings, show=None) -> None:
+    """Add the cost columns to the successful ``records`` of ``target`` (in
+    place); a failed measurement leaves them None and adds ``cost_error``."""
+    ok = [r for r in records if "error" not in r]
+    if not ok:
+        return
+    try:
+        target_worker = Worker(target, settings.res, settings.spp)
+    except CostError as error:
+        for r in ok:
+            r["cost_error"] = f"the target's cost worker failed: {error}"
+        return
+    with target_worker:
+        for r in ok:
+            load = os.getloadavg()[0]
+            try:
+                with Worker(r["parameters"], settings.res, settings.spp) as model_worker:
+                    r.update(compare(target_worker, model_worker, settings.cost_rounds,
+                                     settings.cost_tolerance))
+                    r["ops_ratio"] = model_worker.ops / target_worker.ops
+                    r["ops"] = model_worker.ops
+            except CostError as error:
+                r["cost_error"] = str(error)
+            r["cost_load"] = load
+            if show:
+                show(r)
+
+
+def measure_all(targets: list, records: list[dict], settings, show=None, offset: int = 0,
+                total: int | None = None, start: float | None = None) -> None:
+    """:func:`measure_costs` for every target, one measurement at a time;
+    ``show(done, total, elapsed, record)`` after each (``offset``: the steps
+    done before, ``start``: the run's ``time.perf_counter()`` at its start)."""
+    start = time.perf_counter() if start is None else start
+    done = [offset]
+
+    def step(record: dict) -> None:
+        done[0] += 1
+        if show:
+            show(done[0], total or done[0], time.perf_counter() - start, record)
+
+    for t in targets:
+        mine = [r for r in records if r.get("target_name") == t.name]
+        measure_costs(t, mine, settings, step)
+        done[0] += sum(1 for r in mine if "error" in r)
+
+
+def remeasure(report_dir: str, max_targets: int | None = None, settings=None, show=None
+              ) -> list[dict]:
+    """The fits of a report measured again: per fit, the report's interval and
+    the new one."""
+    from . import targets as T
+    from .task import FULL
+    settings = settings or FULL
+    with open(os.path.join(report_dir, "fits.json")) as f:
+        saved = [r for r in json.load(f) if "error" not in r and r.get("cost_ratio") is not None]
+    specs = list(dict.fromkeys(r["target"] for r in saved))[:max_targets]
+    rows = []
+    for spec in specs:
+        target = T.parse([spec])[0]
+        again = [{"model": r["model"], "parameters": r["parameters"]} for r in saved
+                 if r["target"] == spec]
+        measure_costs(target, again, settings, show)
+        for old, new in zip([r for r in saved if r["target"] == spec], again):
+            rows.append({"target": spec, "model": old["model"],
+                         "before": (old["cost_ratio"], old["cost_low"], old["cost_high"]),
+                         "again": (new.get("cost_ratio"), new.get("cost_low"), new.get("cost_high")),
+                         "rounds": new.get("cost_rounds"), "load": new.get("cost_load"),
+                         "overlap": (new.get("cost_low") is not None
+                                     and new["cost_low"] <= old["cost_high"]
+                                     and old["cost_low"] <= new["cost_high"])})
+    return rows
+
+
+def main(argv: list[str] | None = None) -> int:
+    from ..errors import one_line
+    p = argparse.ArgumentParser(prog="python -m mi_brdfs.tools.fit.cost",
+                                description="Measure a fit report's render costs again and "
+                                            "compare the intervals (writes nothing).")
+    p.add_argument("report", help="a mi-brdfs fit report folder (its fits.json)")
+    p.add_argument("--targets", type=int, default=None, help="only the first N targets")
+    args = p.parse_args(argv)
+    try:
+        rows = remeasure(args.report, args.targets)
+    except Exception as error:
+        print(f"{p.prog}: error: {one_line(error)}", file=sys.stderr)
+        return 1
+    print("| target | model | report | again | rounds | load | overlap |")
+    print("|---|---|---|---|---|---|---|")
+    for r in rows:
+        b, a = r["before"], r["again"]
+        again = "failed" if a[0] is None else f"{a[0]:.2f} ({a[1]:.2f}–{a[2]:.2f})"
+        print(f"| {r['target']} | {r['model']} | {b[0]:.2f} ({b[1]:.2f}–{b[2]:.2f}) | {again} | "
+              f"{r['rounds']} | {r['load']:.1f} | {'yes' if r['overlap'] else 'NO'} |")
+    both = [r for r in rows if r["again"][0] is not None]
+    widths = [r["again"][2] / r["again"][1] for r in both]
+    print(f"\n{sum(r['overlap'] for r in both)} of {len(both)} intervals overlap; "
+          f"high/low median {statistics.median(widths):.3f}, largest {max(widths):.3f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

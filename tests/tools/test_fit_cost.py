@@ -1,0 +1,82 @@
+"""mi-brdfs fit's render cost and ranking (issue 26, points 2 and 3): the
+interval is Student's t on the log ratios, two measurements of the same
+models overlap (a loose bound: the bench shows the real spread), the counted
+operations do not move between runs, the Pareto front treats overlapping
+intervals as equal cost, and the ranking follows FLIP. No timing is asserted."""
+import math
+
+import numpy as np
+import pytest
+
+from mi_brdfs.tools.fit import cost, rank, targets, task
+
+SETTINGS = task.QUICK.replace(res=32, spp=4, cost_rounds=(4, 8), cost_tolerance=0.05)
+T90_4 = 2.131847      # Student's t, 95th percentile, 4 degrees of freedom (tables)
+
+
+def test_the_interval_is_students_t_on_the_log_ratios():
+    ratios = [0.9, 1.1, 1.0, 0.95, 1.05]
+    logs = np.log(ratios)
+    half = T90_4 * np.std(logs, ddof=1) / math.sqrt(len(logs))
+    mean, low, high = cost.interval(ratios)
+    assert mean == pytest.approx(math.exp(np.mean(logs)))
+    assert (low, high) == pytest.approx((math.exp(np.mean(logs) - half), math.exp(np.mean(logs) + half)))
+    assert cost.interval([1.3])[1:] == (0.0, math.inf)         # one round: no interval
+
+
+def measured(target: str, models: dict) -> dict:
+    records = [{"target": target, "model": m, "parameters": p} for m, p in models.items()]
+    cost.measure_costs(targets.parse([target])[0], records, SETTINGS)
+    return {r["model"]: r for r in records}
+
+
+MODELS = {"lambert": {"type": "lambert", "reflectance": [0.7, 0.5, 0.3]},
+          "cook_torrance": {"type": "cook_torrance", "distribution": "ggx", "alpha": 0.2,
+                            "diffuse_reflectance": [0.7, 0.5, 0.3]}}
+
+
+def test_two_measurements_overlap_and_the_counts_repeat():
+    first = measured("diffuse:reflectance=[0.7,0.5,0.3]", MODELS)
+    second = measured("diffuse:reflectance=[0.7,0.5,0.3]", MODELS)
+    loose = 1.5         # the intervals of a shared machine, widened by half
+    for name in MODELS:
+        a, b = first[name], second[name]
+        assert "cost_error" not in a and "cost_error" not in b, (a, b)
+        assert a["cost_low"] <= a["cost_ratio"] <= a["cost_high"]
+        assert SETTINGS.cost_rounds[0] <= a["cost_rounds"] <= SETTINGS.cost_rounds[1]
+        assert a["cost_low"] / loose <= b["cost_high"] * loose
+        assert b["cost_low"] / loose <= a["cost_high"] * loose
+        assert a["ops"] == b["ops"] and a["ops_ratio"] == b["ops_ratio"]
+    # Cook-Torrance's traced eval and sample hold more operations than Lambert's.
+    assert first["cook_torrance"]["ops"] > first["lambert"]["ops"]
+
+
+def test_a_worker_that_fails_is_reported_not_raised():
+    records = [{"target": "diffuse:", "model": "bad", "parameters": {"type": "lambert",
+                                                                    "reflectance": -1.0}}]
+    cost.measure_costs(targets.parse(["diffuse:"])[0], records, SETTINGS)
+    assert records[0].get("cost_ratio") is None
+    assert "reflectance" in records[0]["cost_error"]
+
+
+def fit(model, flip, c=None, lo=None, hi=None):
+    return {"model": model, "image_flip": flip, "cost_ratio": c, "cost_low": lo, "cost_high": hi}
+
+
+def test_the_front_treats_overlapping_intervals_as_equal_cost():
+    rows = [fit("a", 0.10, 1.0, 0.95, 1.05),
+            fit("b", 0.20, 1.02, 0.97, 1.07),      # as costly as a (overlap), worse: off
+            fit("c", 0.30, 0.60, 0.55, 0.65),      # cheaper, worse: on
+            fit("d", 0.30, 0.80, 0.75, 0.85),      # costlier than c, no better: off
+            fit("e", 0.05, 2.00, 1.90, 2.10)]      # costlier, better: on
+    assert [r["model"] for r in rank.front(rows)] == ["a", "c", "e"]
+    assert rank.equal_cost(rows[0], rows[1]) and rank.cheaper(rows[2], rows[0])
+
+
+def test_the_ranking_follows_flip_and_prefers_the_cheaper_of_a_tie():
+    rows = [fit("x", 0.200, 1.0, 0.9, 1.05), fit("y", 0.102, 1.2, 1.1, 1.3),
+            fit("z", 0.100, 2.0, 1.9, 2.1), {"model": "failed", "error": "boom"}]
+    assert [r["model"] for r in rank.ranked(rows)] == ["y", "z", "x"]     # 0.102 ties 0.100
+    line = rank.verdict(rows, "roughconductor")
+    assert line == ("y: FLIP 0.102, 1.20× (1.10–1.30) the cost of roughconductor; "
+                    "x is 1.00× (0.90–1.05) the cost at FLIP 0.200")

@@ -1,0 +1,148 @@
+"""mi-brdfs fit's optimiser reaches the optimum (issue 26, point 1): every
+model fitted to itself at two coloured configurations recovers what its
+BRDF shows, Lambert recovers a pure-Lambert colour with a dark channel, and a
+model that contains another as a limit never fits worse than it. Small
+direction sets (the quick metric's pairs), no renders."""
+import math
+
+import numpy as np
+import pytest
+
+import mitsuba as mi
+
+from mi_brdfs.tools.fit import metric, models, optimise, targets, task
+
+SETTINGS = task.QUICK.replace(render=False)        # the default scan and starts; fewer pairs
+RELATIVE = ("alpha", "exponent", "sigma")          # exponents and roughnesses: within 1 %
+
+# Two coloured configurations per plugin, away from every bound (toon with
+# smooth steps: a hard step has no gradient with respect to its threshold).
+CONFIGS = {
+    "lambert": [{"reflectance": [0.6, 0.35, 0.15]}, {"reflectance": [0.2, 0.5, 0.7]}],
+    "oren_nayar": [{"reflectance": [0.6, 0.35, 0.15], "sigma": 0.3},
+                   {"reflectance": [0.2, 0.5, 0.7], "sigma": 0.8}],
+    "phong": [{"diffuse_reflectance": [0.5, 0.3, 0.2], "specular_reflectance": [0.3, 0.3, 0.25],
+               "exponent": 40.0},
+              {"diffuse_reflectance": [0.1, 0.3, 0.5], "specular_reflectance": [0.5, 0.4, 0.2],
+               "exponent": 400.0}],
+    "blinn": [{"diffuse_reflectance": [0.5, 0.3, 0.2], "specular_reflectance": [0.3, 0.3, 0.25],
+               "exponent": 80.0},
+              {"diffuse_reflectance": [0.1, 0.3, 0.5], "specular_reflectance": [0.5, 0.4, 0.2],
+               "exponent": 600.0}],
+    "ward": [{"diffuse_reflectance": [0.5, 0.3, 0.2], "specular_reflectance": [0.3, 0.3, 0.25],
+              "alpha": 0.15},
+             {"diffuse_reflectance": [0.1, 0.3, 0.5], "specular_reflectance": [0.5, 0.4, 0.2],
+              "alpha": 0.4}],
+    "cook_torrance": [{"diffuse_reflectance": [0.7, 0.3, 0.1], "specular_reflectance": [0.9, 0.8, 0.6],
+                       "k": 0.3, "f0": 0.05, "alpha": 0.25},
+                      {"diffuse_reflectance": [0.2, 0.4, 0.8], "specular_reflectance": [0.8, 0.9, 0.7],
+                       "k": 0.6, "f0": 0.7, "alpha": 0.08}],
+    "toon": [{"diffuse_reflectance": [0.8, 0.5, 0.3], "diffuse_shade": [0.2, 0.1, 0.1],
+              "diffuse_threshold": 0.4, "specular_reflectance": [0.9, 0.9, 0.8],
+              "specular_shade": [0.05, 0.05, 0.1], "specular_threshold": 0.85, "smoothness": 0.3},
+             {"diffuse_reflectance": [0.3, 0.6, 0.8], "diffuse_shade": [0.1, 0.2, 0.3],
+              "diffuse_threshold": 0.1, "specular_reflectance": [0.7, 0.6, 0.5],
+              "specular_shade": [0.02, 0.04, 0.06], "specular_threshold": 0.95, "smoothness": 0.15}],
+}
+
+
+def pairs(settings=SETTINGS):
+    return metric.pairs(settings.metric, settings.viewers, settings.uniform, settings.lobe)
+
+
+def fit_to(target_bsdf, model_name: str, settings=SETTINGS) -> dict:
+    prob = optimise.problem(target_bsdf, pairs(settings), settings.objective)
+    return optimise.fit_model(models.select([model_name])[0], prob, settings)
+
+
+def identifiable(plugin: str, p: dict) -> dict:
+    """What the BRDF shows of the parameters, written from the formulas (not
+    from the package): cook_torrance sees k·m_D and (1 - k)·m_S, not k; toon,
+    with every light above the surface, sees the steps m_1 - m_2 and the sum
+    of the two shades (m_D2 for lights below it never shows)."""
+    c = lambda name: np.asarray(p[name], dtype=float)
+    if plugin == "cook_torrance":
+        return {"k m_D": p["k"] * c("diffuse_reflectance"),
+                "(1-k) m_S": (1 - p["k"]) * c("specular_reflectance"),
+                "f0": p["f0"], "alpha": p["alpha"]}
+    if plugin == "toon":
+        return {"m_D1 - m_D2": c("diffuse_reflectance") - c("diffuse_shade"),
+                "m_S1 - m_S2": c("specular_reflectance") - c("specular_shade"),
+                "m_D2 + m_S2": c("diffuse_shade") + c("specular_shade"),
+                **{k: p[k] for k in ("diffuse_threshold", "specular_threshold", "smoothness")}}
+    return {k: (c(k) if isinstance(p[k], list) else p[k])
+            for k in p if k not in ("type", "mode") and not isinstance(p[k], (str, bool))}
+
+
+@pytest.mark.parametrize("name", models.names())
+def test_every_model_fitted_to_itself_reaches_the_optimum(name):
+    model = models.select([name])[0]
+    for config in CONFIGS[model.plugin]:
+        truth = {**model.properties(), **config}
+        result = fit_to(mi.load_dict(models.load_dict(truth)), name)
+        assert result["brdf_error"] <= 1e-4, (config, result["parameters"])
+        want = identifiable(model.plugin, {k: truth[k] for k in ("type", *config)})
+        got = identifiable(model.plugin, {k: result["parameters"][k] for k in ("type", *config)})
+        for key, value in want.items():
+            if key in RELATIVE:
+                assert got[key] == pytest.approx(value, rel=0.01), (key, config)
+            else:
+                assert np.allclose(got[key], value, atol=0.005), (key, got[key], value, config)
+
+
+def test_lambert_recovers_a_dark_channel_of_a_lambert_target():
+    result = fit_to(targets.parse(["diffuse:reflectance=[0.55,0.32,0.07]"])[0].load(), "lambert")
+    assert np.allclose(result["parameters"]["reflectance"], [0.55, 0.32, 0.07], atol=0.005)
+    assert result["parameters"]["reflectance"][2] == pytest.approx(0.07, abs=0.005)
+
+
+# A model that contains another as a limit (oren_nayar at σ = 0, cook_torrance at
+# k = 1 are lambert) never fits worse than it, on any target.
+CONTAINS = [("oren_nayar", "lambert"), ("oren_nayar+ec", "lambert"),
+            ("cook_torrance/ggx/smith", "lambert"), ("cook_torrance/beckmann/cook_torrance+ec", "lambert"),
+            ("phong", "lambert")]
+TARGETS = ["roughconductor:material=Au,alpha=0.1",
+           "roughplastic:alpha=0.2,diffuse_reflectance=[0.1,0.2,0.6]",
+           "diffuse:reflectance=[0.7,0.5,0.3]",
+           "cook_torrance:distribution=ggx,alpha=0.25,k=0.3,f0=0.05,"
+           "diffuse_reflectance=[0.7,0.3,0.1],specular_reflectance=[0.9,0.9,1.0]"]
+
+
+@pytest.mark.parametrize("target", TARGETS)
+def test_a_model_never_fits_worse_than_one_it_contains(target):
+    prob = optimise.problem(targets.parse([target])[0].load(), pairs(), SETTINGS.objective)
+    fitted = {}
+    for name in dict.fromkeys(n for pair in CONTAINS for n in pair):
+        fitted[name] = optimise.fit_model(models.select([name])[0], prob, SETTINGS)["objective"]
+    for bigger, smaller in CONTAINS:
+        assert fitted[bigger] <= fitted[smaller] + 1e-6, (bigger, smaller, fitted)   # float32: ~1e-8
+
+
+def test_a_parameter_moves_off_its_bound():
+    """The logistic keeps a gradient at every value: a start with k at its
+    upper end (u = +6, 0.25 % below 1) still reaches the target's k."""
+    truth = {"type": "cook_torrance", "distribution": "ggx", "geometry": "smith", "k": 0.2,
+             "f0": 0.5, "alpha": 0.3, "diffuse_reflectance": [0.6, 0.4, 0.2],
+             "specular_reflectance": [0.8, 0.8, 0.8]}
+    prob = optimise.problem(mi.load_dict(models.load_dict(truth)), pairs(), SETTINGS.objective)
+    ev = optimise.Evaluator(models.select(["cook_torrance/ggx/smith"])[0], prob)
+    start = {**{k: truth[k] for k in ("diffuse_reflectance", "specular_reflectance", "f0", "alpha")},
+             "k": ev.free[[f.name for f in ev.free].index("k")].value(models.U_START)}
+    u, _ = optimise.levenberg_marquardt(ev, ev.coordinates(start, models.U_MAX), 150)
+    fitted = models.values(ev.free, u)
+    assert fitted["k"] * np.array(fitted["diffuse_reflectance"]) == pytest.approx(
+        [0.12, 0.08, 0.04], abs=0.005)
+    assert math.isfinite(float(np.sum(ev.residuals(u) ** 2)))
+
+
+def test_the_logistic_is_a_bijection_onto_each_range():
+    """x = lo + (hi - lo)/(1 + e^-u) and back, with a finite slope at ±U_MAX."""
+    for f in (models.Free("k", "k", False, 0.0, 1.0),
+              models.Free("exponent", "exponent.value", False, 0.0, models.EXPONENT_MAX, True),
+              models.Free("t", "t.value", False, -1.0, 1.0)):
+        for x in (f.lo + 1e-6 * (f.hi - f.lo), 0.5 * (f.lo + f.hi), f.hi - 1e-6 * (f.hi - f.lo)):
+            assert float(f.value(f.coordinate(x))) == pytest.approx(x, rel=1e-6, abs=1e-9)
+        u = np.array([-models.U_MAX, 0.0, models.U_MAX])
+        slope = (f.hi - f.lo) * np.exp(-u) / (1 + np.exp(-u)) ** 2
+        assert np.all(slope > 0)
+        assert f.value(u) == pytest.approx(f.lo + (f.hi - f.lo) / (1 + np.exp(-u)))

@@ -285,11 +285,12 @@ def test_fit_table_is_the_committed_sweep(site):
         tables = article(read(site, page)).split("<table")[1:]
         table = next(t for t in tables if "cost ×" in t).split("</table>", 1)[0]
         header = re.findall(r"<th[ >]", table)
-        assert len(header) == len(targets) + 2, page
-        rows = re.findall(r"<tr[^>]*>(.*?)</tr>", table, re.S)[1:]
+        assert len(header) == len(targets) + 3, page       # model, cost, operations, targets
+        rows = [plain(row) for row in re.findall(r"<tr[^>]*>(.*?)</tr>", table, re.S)[1:]]
         assert len(rows) == len(dict.fromkeys(r["model"] for r in records))
-        first = records[0]
-        assert f"{first['brdf_error']:.3f} · {first['image_flip']:.2f}" in plain(rows[0]), page
+        for r in records:                                 # each cell: FLIP · BRDF error
+            row = next(row for row in rows if row.split()[0] == r["model"])
+            assert f"{r['image_flip']:.2f} · {r['brdf_error']:.3f}" in row, (page, r["model"])
     assert f"{len(records)} fits" in text_of(site, "guide/fit.html")
 
 

@@ -42,7 +42,7 @@ from typing import NoReturn
 
 from .. import _interrupt as interrupt
 from ..render import imagefile, tonemap
-from . import outputs
+from . import destinations
 from .arguments import info_logger, integer, real, set_threads, set_variant, set_verbosity
 from .errors import CLIError, one_line
 from .progress import Progress
@@ -160,7 +160,7 @@ def cmd_render(args: argparse.Namespace) -> int:
     targets = args.output or [default_output(scene_path, bundled)]
     for path in targets:
         imagefile.check_extension(path)
-        outputs.check_output_file(path)
+        destinations.check_output_file(path)
     if args.tonemap not in tonemap.OPERATORS:
         raise CLIError(f"--tonemap {args.tonemap} is unknown; valid: {', '.join(tonemap.OPERATORS)}")
 

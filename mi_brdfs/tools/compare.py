@@ -42,7 +42,7 @@ Verdict per test image: PASS or FAIL against the thresholds given, "no
 thresholds" when none is given. Exit status: 0 when no test fails, 3 when
 one fails, 1 on an error.
 
-The report folder (see :mod:`.outputs`: new, empty, or a previous report;
+The report folder (see :mod:`.destinations`: new, empty, or a previous report;
 never a folder with other files) holds ``index.html``, ``metrics.json``,
 ``metrics.csv``, the pictures as PNG (both images tone-mapped the same way,
 the signed difference and the relative error on a robust scale, the FLIP
@@ -62,7 +62,7 @@ from typing import Iterator
 import numpy as np
 
 from ..render import exr, tonemap
-from . import measures, outputs, pages
+from . import destinations, measures, pages
 from .pages import esc
 
 CHANNELS = "RGB"
@@ -430,7 +430,7 @@ def compare(reference: str, tests: list[str], out_dir: str, thresholds: dict | N
             operator: str = "clamp", flip_mode: str | None = None,
             mask_nonfinite: bool = False, layer: str | None = None) -> list[Comparison]:
     """Compare every test image with the reference and write the report to
-    out_dir; ``layer`` picks a layer of the EXR inputs. Raises CompareError (bad input) or outputs.OutputError (a report
+    out_dir; ``layer`` picks a layer of the EXR inputs. Raises CompareError (bad input) or destinations.OutputError (a report
     folder that cannot be used) before comparing or writing anything."""
     thresholds = {k: v for k, v in (thresholds or {}).items() if v is not None}
     for key in thresholds:
@@ -444,7 +444,7 @@ def compare(reference: str, tests: list[str], out_dir: str, thresholds: dict | N
     inputs = [reference, *tests]
     for path in inputs:
         check_type(path)
-    outputs.check_report_dir(out_dir, inputs)
+    destinations.check_report_dir(out_dir, inputs)
     flip_mode = flip_mode or default_flip_mode(inputs)
     ldr = default_flip_mode(inputs) == "ldr"            # every input is PNG/JPEG
 
@@ -462,7 +462,7 @@ def compare(reference: str, tests: list[str], out_dir: str, thresholds: dict | N
 
     comparisons, layers = [], {"reference": finite(ref)}
     ref_mask = nonfinite(ref)
-    with outputs.report_dir(out_dir, "compare", inputs) as tmp:
+    with destinations.report_dir(out_dir, "compare", inputs) as tmp:
         for i, (path, image) in enumerate(images):
             mask = (ref_mask | nonfinite(image)) if mask_nonfinite else None
             m = metrics(ref, image, with_flip=False, mask=mask,

@@ -20,7 +20,7 @@ The package, by concern:
 - :mod:`.report` — results.json, results.csv, README.md and the findings;
 - :mod:`.plots` — the figures.
 
-OUT_DIR follows the rule of every report folder (:mod:`mi_brdfs.tools.outputs`):
+OUT_DIR follows the rule of every report folder (:mod:`mi_brdfs.tools.destinations`):
 new, empty, or a previous report (its marker file lists what it wrote);
 anything else is refused before any work. ``--quick`` is a smoke test that
 every group runs: it draws no findings, and says that its numbers are not
@@ -56,7 +56,7 @@ def run(out_dir: str, quick: bool = False, only: list[str] | None = None,
     """Run the groups (``only``, or all) and write the report to ``out_dir``;
     the results. Unknown groups, missing dependencies and an unusable report
     folder are refused before any work."""
-    from .. import outputs
+    from .. import destinations
     from . import plots, report
     from .measure import machine
 
@@ -68,7 +68,7 @@ def run(out_dir: str, quick: bool = False, only: list[str] | None = None,
     cache = cache_dir or DEFAULT_CACHE
     settings = QUICK if quick else FULL
     refs = References(cache, settings.ref_spp)
-    with outputs.report_dir(out_dir, "bench", [cache]) as tmp:     # checked first
+    with destinations.report_dir(out_dir, "bench", [cache]) as tmp:     # checked first
         if quick:
             log(f"bench: {report.SMOKE_TEST}")
         start = time.perf_counter()

@@ -51,7 +51,7 @@ def fit(specs: list[str], out_dir: str, model_names: list[str] | None = None,
     with a worker within ``worker_timeout`` seconds). ``also(folder,
     records)`` may add files to the report. Returns the records (see
     :mod:`.report`)."""
-    from .. import compare, outputs
+    from .. import compare, destinations
     from . import cost, effective, report, sweep
 
     if metric_name not in metric.METRICS:
@@ -59,7 +59,7 @@ def fit(specs: list[str], out_dir: str, model_names: list[str] | None = None,
     chosen = models.select(model_names)
     parsed, repeated = targets.unique(targets.parse(specs))
     files = [t.spec for t in parsed if t.xml is not None]
-    outputs.check_report_dir(out_dir, files)
+    destinations.check_report_dir(out_dir, files)
     compare.require_reports()
     settings = (settings or (QUICK if quick else FULL)).replace(metric=metric_name)
     if settings.objective not in metric.OBJECTIVES:
@@ -89,7 +89,7 @@ def fit(specs: list[str], out_dir: str, model_names: list[str] | None = None,
     if measuring:
         cost.measure_all(parsed, records, settings, show, offset=len(tasks), total=total,
                          start=start)
-    with outputs.report_dir(out_dir, "fit", files) as tmp:
+    with destinations.report_dir(out_dir, "fit", files) as tmp:
         records = report.write(tmp, records, settings, command, found)
         if also:
             also(tmp, records)

@@ -1,4 +1,4 @@
-"""What ``mi-brdfs fit -o DIR`` writes (a report folder, :mod:`..outputs`):
+"""What ``mi-brdfs fit -o DIR`` writes (a report folder, :mod:`..destinations`):
 
 ``fits.json``
     a list of records, one per target × model, in rank order per target:

@@ -124,7 +124,7 @@ def table(results: dict) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from .. import outputs
+    from .. import destinations
     from ..errors import one_line
     p = argparse.ArgumentParser(prog="python -m mi_brdfs.tools.fit.study",
                                 description="Measure the fit's objectives (see the module).")
@@ -133,12 +133,12 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("-j", "--jobs", type=int, default=2, help="fits at once (default 2)")
     args = p.parse_args(argv)
     try:
-        outputs.check_report_dir(args.output)
+        destinations.check_report_dir(args.output)
         from .sweep import progress_printer
         show = progress_printer(p.prog)
         results = run_study(args.quick, args.jobs, show)
         show.close()
-        with outputs.report_dir(args.output, "fit-study") as tmp:
+        with destinations.report_dir(args.output, "fit-study") as tmp:
             with open(os.path.join(tmp, "objectives.json"), "w") as f:
                 json.dump(results, f, indent=1)
             with open(os.path.join(tmp, "objectives.md"), "w") as f:

@@ -116,7 +116,7 @@ def main(argv: list[str] | None = None) -> int:
     """Write the walk's reference albedos (-o), print the residual of every
     compensated cook_torrance D x G against them (--residuals), or what the
     other options name."""
-    from ..outputs import OutputError, check_output_file
+    from ..destinations import OutputError, check_output_file
 
     parser = _parser()
     args = parser.parse_args(argv)

@@ -55,7 +55,7 @@ fails that is not documented. New rows in the models' cases get their
 checks without any change here.
 
 The report folder is new, empty or a previous report (never a folder with
-other files, see :mod:`mi_brdfs.tools.outputs`); it is written into a temporary folder and
+other files, see :mod:`mi_brdfs.tools.destinations`); it is written into a temporary folder and
 moved into place when complete. ``--quick`` runs a reduced grid at reduced
 sizes (for CI).
 
@@ -70,7 +70,7 @@ import time
 from typing import Callable
 
 from ...bsdfs import cases
-from .. import compare, outputs
+from .. import compare, destinations
 from .verdicts import DOCUMENTED, Known, checks, documented, summary
 from .page import html_page
 from .sections import (ALPHA, FULL, QUICK, Settings, chi2_count, equivalence_section, fresnel_section,
@@ -98,7 +98,7 @@ def validate(out_dir: str, quick: bool = False, log: Callable[[str], None] = pri
     negative = cases.negative_controls()
     count = chi2_count(chi2, negative)
     start = time.perf_counter()
-    with outputs.report_dir(out_dir, "validate") as tmp:
+    with destinations.report_dir(out_dir, "validate") as tmp:
         results = {"size": "quick" if quick else "full", "mitsuba": mi.__version__,
                    "variant": mi.variant()}
         log("built-in equivalence ...")

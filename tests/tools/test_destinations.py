@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from mi_brdfs.render import exr
-from mi_brdfs.tools import outputs
+from mi_brdfs.tools import destinations
 
 
 def run(*args, cwd=None, umask=None):
@@ -92,9 +92,9 @@ def test_a_previous_report_is_replaced_and_only_its_own_files_go(renders, tmp_pa
     ref, test = str(renders / "ref.exr"), str(renders / "test.exr")
     assert run("compare", ref, test, test, "-o", str(rep)).returncode == 0
     first = set(os.listdir(rep))
-    assert "test1_difference.png" in first and outputs.MARKER in first
-    listed = json.loads((rep / outputs.MARKER).read_text())["files"]
-    assert set(listed) | {outputs.MARKER} == first
+    assert "test1_difference.png" in first and destinations.MARKER in first
+    listed = json.loads((rep / destinations.MARKER).read_text())["files"]
+    assert set(listed) | {destinations.MARKER} == first
     assert run("compare", ref, test, "-o", str(rep)).returncode == 0        # replaced
     second = set(os.listdir(rep))
     assert "test1_difference.png" not in second and "test0_difference.png" in second
@@ -120,10 +120,10 @@ def test_a_marker_that_lists_other_files_does_not_delete_them(tmp_path):
     only what the marker lists may go, and a foreign file blocks the write."""
     folder = tmp_path / "rep"
     folder.mkdir()
-    (folder / outputs.MARKER).write_text(json.dumps({"command": "compare", "files": ["a.png"]}))
+    (folder / destinations.MARKER).write_text(json.dumps({"command": "compare", "files": ["a.png"]}))
     (folder / "b.txt").write_text("user\n")
-    with pytest.raises(outputs.OutputError, match="b.txt"):
-        outputs.check_report_dir(str(folder))
+    with pytest.raises(destinations.OutputError, match="b.txt"):
+        destinations.check_report_dir(str(folder))
     assert (folder / "b.txt").read_text() == "user\n"
 
 
@@ -153,16 +153,16 @@ def test_unwritable_targets_are_found_before_any_work(renders, tmp_path):
     out = run("compare", str(renders / "ref.exr"), str(renders / "test.exr"),
               "-o", "/proc/report")
     assert "cannot write in /proc" in one_line_error(out, "compare")
-    with pytest.raises(outputs.OutputError, match="does not exist"):
-        outputs.check_output_file(str(tmp_path / "missing" / "x.exr"))
-    with pytest.raises(outputs.OutputError, match="is a folder"):
-        outputs.check_output_file(str(tmp_path))
+    with pytest.raises(destinations.OutputError, match="does not exist"):
+        destinations.check_output_file(str(tmp_path / "missing" / "x.exr"))
+    with pytest.raises(destinations.OutputError, match="is a folder"):
+        destinations.check_output_file(str(tmp_path))
 
 
 def test_an_interrupted_report_leaves_the_target_as_it_was(tmp_path):
     target = tmp_path / "rep"
     with pytest.raises(KeyboardInterrupt):
-        with outputs.report_dir(str(target), "compare") as tmp:
+        with destinations.report_dir(str(target), "compare") as tmp:
             Path(tmp, "index.html").write_text("half")
             raise KeyboardInterrupt
     assert os.listdir(tmp_path) == []
@@ -174,23 +174,23 @@ def test_a_report_with_subfolders_is_replaced_and_nothing_else_goes(tmp_path):
     and a user's file added in a subfolder makes the folder foreign."""
     target = tmp_path / "report"
     for round_ in range(2):
-        with outputs.report_dir(str(target), "test") as tmp:
+        with destinations.report_dir(str(target), "test") as tmp:
             os.makedirs(os.path.join(tmp, "trade", "fits"))
             for name in ("a.txt", "trade/b.txt", f"trade/fits/c{round_}.xml"):
                 with open(os.path.join(tmp, name), "w") as f:
                     f.write(name)
-    listed = json.loads((target / outputs.MARKER).read_text())["files"]
+    listed = json.loads((target / destinations.MARKER).read_text())["files"]
     assert listed == ["a.txt", "trade/b.txt", "trade/fits/c1.xml"]
     assert not (target / "trade" / "fits" / "c0.xml").exists()       # the old report's own
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".tmp")]
     (target / "trade" / "mine.txt").write_text("the user's")
-    with pytest.raises(outputs.OutputError, match="trade/mine.txt"):
-        outputs.check_report_dir(str(target))
+    with pytest.raises(destinations.OutputError, match="trade/mine.txt"):
+        destinations.check_report_dir(str(target))
     assert (target / "trade" / "mine.txt").read_text() == "the user's"
     bad = tmp_path / "bad"
     bad.mkdir()
-    (bad / outputs.MARKER).write_text(json.dumps({"command": "x", "files": ["../outside.txt"]}))
-    assert outputs.previous_report(str(bad)) is None
+    (bad / destinations.MARKER).write_text(json.dumps({"command": "x", "files": ["../outside.txt"]}))
+    assert destinations.previous_report(str(bad)) is None
 
 
 @pytest.mark.parametrize("spelling", ["elink", "elink/", "elink//", "./elink/"])

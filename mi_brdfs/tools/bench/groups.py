@@ -329,10 +329,10 @@ def trade(s: Settings, refs: References, out_dir: str) -> list[dict]:
     material's own plugin (a 90 % interval) and its traced operations; the fit
     report, with its Pareto plots, renders and each fit as XML, is in the
     folder trade/."""
-    from ..fit import trade as sweep
-    targets = sweep.TARGETS[:s.trade_targets or None]
+    from ..fit.trade import TARGETS, fit_materials
+    targets = TARGETS[:s.trade_targets or None]
     labels = {spec: label for label, spec in targets}
-    records = sweep.fit_materials(os.path.join(out_dir, "trade"), quick=s is not FULL,
+    records = fit_materials(os.path.join(out_dir, "trade"), quick=s is not FULL,
                                   targets=targets, models=list(s.trade_models) or None,
                                   show=lambda *a: None)
     keys = ("model", "rank", "image_flip", "image_relmse", "brdf_error", "cost_ratio", "cost_low",

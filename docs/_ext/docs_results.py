@@ -129,7 +129,6 @@ RESULTS = {
     "validation.ires": _ires_phrase,
     "trade.fits": lambda: str(len(fits())),
     "trade.targets": lambda: str(_trade_targets()),
-    "trade.minutes": lambda: f"{bench()['group_seconds']['trade'] / 60:.0f} minutes",
     "trade.models": lambda: str(_fit_models()),
     "trade.gold_copper": lambda: _trade_range("roughconductor:material=Au",
                                               "roughconductor:material=Cu"),

@@ -148,12 +148,12 @@ def test_python_example_loads_the_xml_example(site, cls):
     assert type(namespace["bsdf"]).__name__ == type(mi.load_string(xml)).__name__
 
 
-def preview_images(site: str, cls) -> dict[tuple[str, str], np.ndarray]:
-    """The page's renders by (mode, value), read from the built site."""
+def preview_images(site: str, cls, param: str) -> dict[tuple[str, str], np.ndarray]:
+    """The page's renders of the sweep of ``param`` by (mode, value), read
+    from the built site."""
     import mitsuba as mi
     page = read(site, f"plugins/{cls.name}.html")
     found = {}
-    param = ALL[cls.name].pictures.parameter
     for tag in re.findall(r"<img[^>]*>", page):
         attrs = dict(re.findall(r'(\w+)="([^"]*)"', tag))
         match = re.fullmatch(rf"{cls.name}, (\w+), {param} = (\S+)", html.unescape(attrs["alt"]))
@@ -167,21 +167,23 @@ def preview_images(site: str, cls) -> dict[tuple[str, str], np.ndarray]:
 def test_plugin_page_renders_vary_its_main_parameter(site, cls):
     """Both modes at every value of the model's pictures, captioned with the
     value; each value and each mode gives a different image."""
-    pictures = ALL[cls.name].pictures
-    assert pictures is not None, "a model declares the renders of its page"
-    images = preview_images(site, cls)
-    values = [f"{v:g}" for v in pictures.values]
-    assert set(images) == {(m, v) for m in ("scanline", "hdr") for v in values}
+    sweeps = ALL[cls.name].picture_sets()
+    assert sweeps, "a model declares the renders of its page"
     page = text_of(site, f"plugins/{cls.name}.html")
-    for v in values:
-        assert f"{pictures.parameter} = {v}" in page
+
     def differ(a, b) -> bool:          # a highlight (8 % of the 8-bit range) or the shading
         d = np.abs(a - b)              # (same seed: an unused parameter gives 0 and 0)
         return d.max() > 20 or d.mean() > 1
-    for mode in ("scanline", "hdr"):
-        for a, b in zip(values, values[1:]):
-            assert differ(images[mode, a], images[mode, b]), (mode, a, b)
-    assert differ(images["scanline", values[0]], images["hdr", values[0]])
+    for pictures in sweeps:
+        images = preview_images(site, cls, pictures.parameter)
+        values = [f"{v:g}" for v in pictures.values]
+        assert set(images) == {(m, v) for m in ("scanline", "hdr") for v in values}
+        for v in values:
+            assert f"{pictures.parameter} = {v}" in page
+        for mode in ("scanline", "hdr"):
+            for a, b in zip(values, values[1:]):
+                assert differ(images[mode, a], images[mode, b]), (pictures.parameter, mode, a, b)
+        assert differ(images["scanline", values[0]], images["hdr", values[0]])
 
 
 @pytest.mark.parametrize("cls", PLUGINS, ids=lambda c: c.name)

@@ -147,24 +147,32 @@ def notes(cls, pictures) -> list[str]:
              "variants it is a depolarizer, as Mitsuba's ``diffuse``.",
              "- **Differentiable**: every parameter marked ∂ is exposed by ``mi.traverse`` "
              "and can be updated and differentiated; options are fixed at load time."]
-    if pictures is not None:
-        param = next((p for p in cls.PARAMS if p.name == pictures.parameter), None)
+    for sweep in pictures:
+        param = next((p for p in cls.PARAMS if p.name == sweep.parameter), None)
         if param is not None:
-            lines.append(f"- **{pictures.parameter}**, varied in the renders below: "
+            lines.append(f"- **{sweep.parameter}**, varied in the renders below: "
                          + " ".join(param.doc.split()))
     return lines + [""]
 
 
 def renders_section(cls, work: Path, srcdir: Path) -> list[str]:
-    from mi_brdfs.bsdfs.cases import ALL, label
-    pictures = ALL[cls.name].pictures
-    made = docs_previews.renders(cls, work / "previews")
-    if not made:
+    from mi_brdfs.bsdfs.cases import ALL
+    sweeps = ALL[cls.name].picture_sets()
+    if not sweeps:
         return []
+    lines = ["Renders", "-------", ""]
+    for sweep in sweeps:
+        lines += sweep_table(cls, sweep, work, srcdir)
+    return lines
+
+
+def sweep_table(cls, pictures, work: Path, srcdir: Path) -> list[str]:
+    """One sweep's renders: its caption, then a row per mode."""
+    from mi_brdfs.bsdfs.cases import label
+    made = docs_previews.renders(cls, work / "previews", pictures)
     values = list(pictures.values)
     rest = label(pictures.config) if pictures.config else "defaults"
-    lines = ["Renders", "-------", "",
-             f"``{pictures.parameter}`` from {values[0]:g} to {values[-1]:g}, the other "
+    lines = [f"``{pictures.parameter}`` from {values[0]:g} to {values[-1]:g}, the other "
              f"parameters: {rest}. Rendered by this site's build "
              f"({docs_previews.RES}² pixels): in scan-line mode (top row) "
              f"{docs_previews.LIGHTS['scanline']}; in hdr mode (bottom row) "
@@ -201,7 +209,7 @@ def page(cls, work: Path, srcdir: Path) -> str:
              "The same BSDF from Python, as a dictionary:", "",
              ".. code-block:: python", "",
              textwrap.indent(python_example(xml_example(doc)), "    "), ""]
-    parts += notes(cls, ALL[name].pictures)
+    parts += notes(cls, ALL[name].picture_sets())
     parts += renders_section(cls, work, srcdir)
     parts += mitsuba_section(cls)
     lobe = DOCS / "validation" / f"lobe_{name}.png"

@@ -82,16 +82,12 @@ def _name(plugin: str, bsdf: dict, mode: str) -> str:
     return f"{plugin}-{mode}-{hashlib.sha256(key.encode()).hexdigest()[:16]}.png"
 
 
-def renders(cls, folder: Path) -> list[Render]:
-    """The renders of one plugin's page (both modes, every value of its
-    pictures' parameter), made if not in ``folder`` already."""
+def renders(cls, folder: Path, pictures) -> list[Render]:
+    """The renders of one sweep of a plugin's page (both modes, every value of
+    the :class:`Pictures`' parameter), made if not in ``folder`` already."""
     import mitsuba as mi
 
-    from mi_brdfs.bsdfs.cases import ALL
     from mi_brdfs.render.tonemap import write_png
-    pictures = ALL[cls.name].pictures
-    if pictures is None:
-        return []
     folder.mkdir(parents=True, exist_ok=True)
     made = []
     for mode in ("scanline", "hdr"):

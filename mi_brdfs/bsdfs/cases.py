@@ -110,10 +110,16 @@ class Cases:
     variants: list[tuple[str, dict]] = field(default_factory=list)   # (label, config) its
                                                    # options are compared on
     # --- the documentation ---------------------------------------------------------------
-    pictures: Pictures | None = None
+    pictures: Pictures | tuple[Pictures, ...] | None = None   # one row of renders each
     mitsuba: tuple[str, ...] = ()        # Mitsuba's related plugins (links on the page)
     checked: str = ""                    # what it is checked against beyond the battery
                                          # (the README's table, Markdown)
+
+    def picture_sets(self) -> list[Pictures]:
+        """The page's sweeps of renders, each a :class:`Pictures`."""
+        if self.pictures is None:
+            return []
+        return [self.pictures] if isinstance(self.pictures, Pictures) else list(self.pictures)
 
 
 def rgb(c) -> dict:

@@ -562,8 +562,11 @@ class CookTorrance(BRDF):
                       for a in (0.05, 0.3)],
             lobes_off=[("cook_torrance k=1 vs lambert", {**c, "k": 1.0, "diffuse_reflectance": 0.6},
                         {"type": "lambert", "reflectance": 0.6})],
-            pictures=Pictures("alpha", (0.05, 0.15, 0.4), {"distribution": "ggx",
-                                                          "geometry": "smith", "k": 0.3}),
+            pictures=(Pictures("alpha", (0.05, 0.15, 0.4), {"distribution": "ggx",
+                                                           "geometry": "smith", "k": 0.3}),
+                      Pictures("alpha_v", (0.05, 0.15, 0.4),       # brushed along s
+                               {"distribution": "ggx", "geometry": "smith", "k": 0.3,
+                                "alpha_u": 0.05})),
             mitsuba=("roughconductor", "roughplastic", "principled"),
             checked="`roughconductor` (isotropic and anisotropic); `roughplastic` (× exact/Schlick "
                     "Fresnel); the random walk on the microsurface",

@@ -18,6 +18,12 @@ RELATIVE = ("alpha", "exponent", "sigma")          # exponents and roughnesses: 
 # Two coloured configurations per plugin, away from every bound (toon with
 # smooth steps: a hard step has no gradient with respect to its threshold).
 CONFIGS = {
+    "ashikhmin_shirley": [{"diffuse_reflectance": [0.5, 0.3, 0.2],
+                           "specular_reflectance": [0.3, 0.3, 0.25],
+                           "exponent_u": 40.0, "exponent_v": 200.0},
+                          {"diffuse_reflectance": [0.1, 0.3, 0.5],
+                           "specular_reflectance": [0.5, 0.4, 0.2],
+                           "exponent_u": 300.0, "exponent_v": 30.0}],
     "lambert": [{"reflectance": [0.6, 0.35, 0.15]}, {"reflectance": [0.2, 0.5, 0.7]}],
     "oren_nayar": [{"reflectance": [0.6, 0.35, 0.15], "sigma": 0.3},
                    {"reflectance": [0.2, 0.5, 0.7], "sigma": 0.8}],

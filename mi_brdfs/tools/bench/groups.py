@@ -333,8 +333,8 @@ def trade(s: Settings, refs: References, out_dir: str) -> list[dict]:
     targets = TARGETS[:s.trade_targets or None]
     labels = {spec: label for label, spec in targets}
     records = fit_materials(os.path.join(out_dir, "trade"), quick=s is not FULL,
-                                  targets=targets, models=list(s.trade_models) or None,
-                                  show=lambda *a: None)
+                            targets=targets, models=list(s.trade_models) or None,
+                            show=lambda *a: None)
     keys = ("model", "rank", "image_flip", "image_relmse", "brdf_error", "cost_ratio", "cost_low",
             "cost_high", "ops_ratio", "seconds")
     return [{"material": labels[r["target"]], **{k: r.get(k) for k in keys},

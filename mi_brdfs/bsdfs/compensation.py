@@ -371,7 +371,16 @@ class Compensation:
     and the lobe it belongs to (``"diffuse"`` or ``"glossy"``: the lobe whose
     weight it takes, whose kind a sample of it reports, and without which it
     is not traced). ``data`` is what the plugin holds as its member ``m_ms``
-    (Dr.Jit arrays a frozen function must see as inputs, or None)."""
+    (Dr.Jit arrays a frozen function must see as inputs, or None).
+
+    The plugin holds its Compensation, so nothing here may hold the plugin
+    (a lambda over ``self``, a bound method): the cycle would keep the plugin
+    and its Dr.Jit arrays alive until Python's cyclic garbage collector runs,
+    and when that happens inside a differentiable render, Dr.Jit's AD raises
+    ("tried to forward-propagate derivatives across edge ... outside of the
+    current dr.isolate_grad() scope"). What a callable needs comes in ``inp``;
+    tests/bsdfs/test_registry.py checks that every plugin is freed by
+    reference counting alone."""
 
     lobe = "glossy"
 

@@ -295,7 +295,9 @@ class CookTorrance(BRDF):
                      roughness(self.m_alpha_v, si, active, hi))
         else:
             alpha = roughness(self.m_alpha, si, active)
-        return self.colours(si, active, alpha=alpha)
+        # f0 rides along for the compensation's lookup (its callables must not
+        # hold the plugin: see compensation.Compensation)
+        return self.colours(si, active, alpha=alpha, f0=self.m_f0)
 
     def lobe_weights(self, inp):
         k = self.switch("k")
@@ -340,11 +342,11 @@ class CookTorrance(BRDF):
         if self.anisotropic:            # over (mu, phi, alpha_u, alpha_v, F0)
             return compensation.Tabulated(
                 walk_residual(o.distribution, o.geometry, True),
-                parameters=lambda inp: (*inp.alpha, self.m_f0),
+                parameters=lambda inp: (*inp.alpha, inp.f0),
                 sources=("alpha_u", "alpha_v", "f0"), colour=lambda inp: inp.colour_s)
         return compensation.Tabulated(
             walk_residual(o.distribution, o.geometry),
-            parameters=lambda inp: (inp.alpha, self.m_f0), sources=("alpha", "f0"),
+            parameters=lambda inp: (inp.alpha, inp.f0), sources=("alpha", "f0"),
             colour=lambda inp: inp.colour_s)
 
     # --- what runs of it: the tests, the validation report, the bench, the pictures ---

@@ -329,6 +329,33 @@ def test_benchmark_results_page_is_the_committed_run(site):
     assert f"{results['seconds']:.0f} s" in page
 
 
+def test_explore_latencies_are_the_committed_run():
+    """The explorer guide's latency table and its start-up and fit times are
+    the committed bench run's group ``explore`` (rounded to the millisecond,
+    start-up and fit to 10 ms)."""
+    rows = committed("benchmarks", "results.json")["groups"]["explore"]
+    with open(os.path.join(DOCS, "guide", "explore.md"), encoding="utf-8") as f:
+        guide = f.read()
+    table = {line.split("|")[1].strip(): line for line in guide.splitlines()
+             if line.startswith("| slider") or line.startswith("| first 128")}
+    lines = {"slider -> plots": "slider → plot data",
+             "re-render": "slider → first pass of the re-render",
+             "256 spp": "slider → 256 spp", "first image": "first 128² image of the configuration"}
+    configs = ["cook_torrance ggx smith", "cook_torrance ggx smith +ec", "phong scanline",
+               "roughconductor (Mitsuba)"]
+    for measure, label in lines.items():
+        cells = [c.strip() for c in table[label].split("|")[2:-1]]
+        for config, cell in zip(configs, cells, strict=True):
+            row = next(r for r in rows if r["measure"] == measure and r["config"] == config)
+            expected = (f"{row['median_ms']:.0f}" if measure == "first image"
+                        else f"{row['median_ms']:.0f} ({row['max_ms']:.0f})")
+            assert cell == expected, (label, config)
+    start = next(r for r in rows if r["measure"] == "startup")["median_ms"] / 1000
+    fit = next(r for r in rows if r["measure"] == "fit")["median_ms"] / 1000
+    assert f"started in {start:.2f} s" in guide
+    assert f"answered in {fit:.1f} s" in guide
+
+
 # ----------------------------------------------------------------------------
 #  The API page; repository paths
 # ----------------------------------------------------------------------------

@@ -199,18 +199,17 @@ def to_srgb8(image: np.ndarray, mode: str) -> np.ndarray:
 #  The fit (mi_brdfs.tools.fit)
 # ----------------------------------------------------------------------------
 
-FIT_STEPS = 160      # Adam steps per start (the fit's QUICK settings have 120, FULL 250)
-
-
 def fit(model: dict, target: dict, options: tuple[str, ...]) -> tuple[dict, float | None]:
     """Fit the course model ``model`` (complete flat material; ``options``: its
     option names, kept fixed) to the BSDF ``target`` (a ``mi.load_dict``
-    dictionary) with the project's fit (its metric's direction pairs, Adam
-    from several starts); returns (the fitted values, flat, colours as
-    lists; the relative BRDF error: 0 identical, 1 as far as black; None
-    if it is not finite)."""
+    dictionary) with the project's fit at its QUICK settings, without
+    renders (its metric's direction pairs; a scan of candidate settings,
+    then Levenberg-Marquardt from the best few:
+    :mod:`mi_brdfs.tools.fit.optimise`); returns (the fitted values, flat,
+    colours as lists; the relative BRDF error: 0 identical, 1 as far as
+    black; None if it is not finite)."""
     from ..fit import metric, models, task
-    settings = task.QUICK.replace(render=False, steps=FIT_STEPS)
+    settings = task.QUICK.replace(render=False)
     pairs = metric.pairs(settings.metric, settings.viewers, settings.uniform, settings.lobe)
     fixed = tuple((name, model[name]) for name in options if name in model)
     chosen = models.Model(model["type"], model["type"], fixed)

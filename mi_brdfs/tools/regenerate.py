@@ -12,7 +12,8 @@
    from each module's title line and its cases' ``checked``;
 3. the committed validation report (``mi-brdfs validate -o docs/validation``),
    where every model's χ², furnace, negative control and lobe plot come from
-   its cases.
+   its cases (``--check`` compares what the report ran with what the cases
+   declare now: a model, a furnace configuration, a χ² test missing or gone).
 
 Everything else is derived when it runs: the battery's cases, the bench's
 rows, the fit's models and the plugin pages (the documentation build). Adding
@@ -23,12 +24,14 @@ from __future__ import annotations
 
 import argparse
 import inspect
+import json
 import os
 import subprocess
 import sys
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 README = os.path.join(ROOT, "README.md")
+REPORT = os.path.join(ROOT, "docs", "validation", "results.json")
 BEGIN, END = "<!-- plugins -->", "<!-- /plugins -->"
 
 
@@ -64,6 +67,40 @@ def missing_tables() -> list[str]:
     return missing
 
 
+def report_runs(results: dict) -> set[tuple]:
+    """What a validation report ran, by name: each model's lobe plot, its
+    furnace configurations and its χ² tests (configuration, θ, φ)."""
+    return ({("lobes", r["model"]) for r in results["lobes"]}
+            | {("furnace", r["model"], r["config"]) for r in results["furnace"]}
+            | {("sampling", r["model"], r["config"], r["theta"], float(r["phi"]))
+               for r in results["sampling"]})
+
+
+def planned_runs() -> set[tuple]:
+    """What ``mi-brdfs validate`` (full) would run now, from the models' cases."""
+    from ..bsdfs import cases
+    return ({("lobes", name) for name in cases.lobe_configs()}
+            | {("furnace", name, label) for name in cases.ALL
+               for label, _ in cases.report_furnace(name)}
+            | {("sampling", name, label, theta, float(case.phi))
+               for name, tests in cases.report_chi2(False).items()
+               for label, case in tests for theta in case.thetas})
+
+
+def stale_report() -> list[str]:
+    """What the committed validation report lacks of the models' cases, and
+    what it ran that they no longer declare (one line each; empty if none)."""
+    if not os.path.exists(REPORT):
+        return [f"{os.path.relpath(REPORT, ROOT)} is missing"]
+    with open(REPORT, encoding="utf-8") as f:
+        done = report_runs(json.load(f))
+    planned = planned_runs()
+    name = lambda run: " ".join(str(x) for x in run)          # noqa: E731
+    return ([f"the validation report lacks {name(r)}" for r in sorted(planned - done, key=str)]
+            + [f"the validation report has {name(r)}, which no case declares"
+               for r in sorted(done - planned, key=str)])
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="python -m mi_brdfs.tools.regenerate",
@@ -82,6 +119,8 @@ def main(argv: list[str] | None = None) -> int:
         readme = f.read()
     if readme_with_table(readme) != readme:
         stale.append("README.md's plugin table")
+    if not args.no_report:
+        stale += stale_report()
     if args.check:
         for line in stale:
             print(f"out of date: {line}")

@@ -6,6 +6,7 @@ the registry alone appears everywhere or fails here, saying where it is
 missing. And the declarations every model is built from (``Param``,
 ``Option``) are checked when its class is defined.
 """
+import json
 import os
 import subprocess
 import sys
@@ -156,8 +157,31 @@ def test_what_is_made_from_the_modules_is_up_to_date():
     assert regenerate.readme_with_table(readme) == readme, \
         "README.md's plugin table is stale: python -m mi_brdfs.tools.regenerate"
     assert regenerate.missing_tables() == []
+    assert regenerate.stale_report() == [], "python -m mi_brdfs.tools.regenerate"
     for cls in PLUGINS:
         assert f"[`{cls.name}`]" in readme
+
+
+def test_a_stale_validation_report_is_noticed(tmp_path, monkeypatch):
+    """``regenerate --check`` names what the committed report lacks (a model
+    added since: here one removed from a copy of the report) and what it ran
+    that no case declares any more."""
+    from mi_brdfs.tools import regenerate
+    with open(regenerate.REPORT, encoding="utf-8") as f:
+        report = json.load(f)
+    for section in ("lobes", "furnace", "sampling"):
+        report[section] = [r for r in report[section] if r["model"] != "ward"]
+    report["sampling"].append({**report["sampling"][0], "config": "a retired case"})
+    copy = tmp_path / "results.json"
+    copy.write_text(json.dumps(report), encoding="utf-8")
+    monkeypatch.setattr(regenerate, "REPORT", str(copy))
+    stale = regenerate.stale_report()
+    assert "the validation report lacks lobes ward" in stale
+    assert any(line.startswith("the validation report lacks furnace ward ") for line in stale)
+    assert any(line.startswith("the validation report lacks sampling ward ") for line in stale)
+    assert any("a retired case" in line and "which no case declares" in line for line in stale)
+    assert all(" ward " in line + " " or "a retired case" in line for line in stale)
+    assert regenerate.main(["--check"]) == 1
 
 
 # ----------------------------------------------------------------------------

@@ -39,7 +39,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from .._binding import bind
+from .._binding import bind, create
 from .compensation import Compensation, ms_lobe
 from .lobes import (ALL, ANY, DIFFUSE, GLOSSY, HORIZON, PDF_FLOOR, WEIGHT_MAX, Lobes, Plan,
                     Scaled, as_type, facing, mean, mixed, one, product, total, weighted)
@@ -550,7 +550,7 @@ class Box:
     as Mitsuba's own traversal reports them for a ``uniform`` texture's value."""
 
     def __init__(self, value: float):
-        self.holder = mi.load_dict({"type": "uniform", "value": float(value)})
+        self.holder = create("uniform", {"value": float(value)})
         self.pointer, self.type = _pointer(self.holder, "value")
 
     def value(self) -> float:

@@ -26,6 +26,8 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from .._binding import create
+
 # The far ends of the ranges. Every accepted value is finite: a parameter with
 # no upper bound takes numbers up to the largest float32. A colour ends at
 # COLOUR_MAX (far above any reflectance; the scan-line clamp limits values above
@@ -335,7 +337,7 @@ class Reader:
             self.check(p, p.default)
             if p.kind == "float":
                 return number(p.default)
-            return mi.load_dict({"type": "uniform", "value": p.default})
+            return create("uniform", {"value": float(p.default)})
         kind, value = props.type(name), props[name]
         if p.kind == "float":
             if kind not in NUMBERS:

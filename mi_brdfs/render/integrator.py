@@ -80,7 +80,7 @@ from __future__ import annotations
 import drjit as dr
 import mitsuba as mi
 
-from .._binding import bind
+from .._binding import bind, create
 
 
 MAX_LAYERS = 64      # see-through surfaces a camera or shadow ray crosses, at most
@@ -217,11 +217,7 @@ def make_course(props: mi.Properties):
     if mode not in COURSE_MODES:
         raise ValueError(f"course: parameter 'mode' = {mode!r} is invalid; valid: "
                          + ", ".join(f'"{m}"' for m in COURSE_MODES))
-    config = {"type": COURSE_MODES[mode]}
-    for key in props.keys():
-        if key != "mode":
-            config[key] = props[key]
-    return mi.load_dict(config)
+    return create(COURSE_MODES[mode], {key: props[key] for key in props.keys() if key != "mode"})
 
 
 def register() -> None:

@@ -173,8 +173,8 @@ def cmd_render(args: argparse.Namespace) -> int:
     from ..render import memory
     from ..render.passes import render_passes, split_passes
 
-    # parallel=False: scene loading with Python plugins in worker threads failed
-    # intermittently here (bad_alloc, basic_string::_M_create); serial loading is cheap.
+    # parallel=False: serial loading is cheap. (Parallel loading failed now and then
+    # while the plugins' constructors called the loader: see _binding.create.)
     scene = mi.load_file(scene_path, parallel=False, **defines)
     spp = check_render_numbers(scene, args, defines)
 

@@ -215,3 +215,25 @@ def test_a_plugin_is_freed_by_reference_counting(name):
         gc.garbage.clear()
         gc.enable()
     assert left == [], f"{name}: freed only by the cyclic garbage collector: {left}"
+
+
+def test_plugins_are_made_without_calling_the_scene_loader(monkeypatch):
+    """A plugin's constructor never calls ``mi.load_dict`` (or load_string):
+    Mitsuba constructs a scene's objects in worker threads, and a loader
+    called from one of them corrupted another's object now and then (see
+    ``mi_brdfs._binding.create``). Every plugin with its defaults, and the
+    course scene (its ``course`` integrator makes the one its mode names)."""
+    calls = []
+    for name in ("load_dict", "load_string"):
+        original = getattr(mi, name)
+        monkeypatch.setattr(mi, name, lambda *a, _f=original, _n=name, **k:
+                            (calls.append((_n, a[0])), _f(*a, **k))[1])
+    scene = Path(mi_brdfs.scenes.path("course"))
+    for cls in PLUGINS:
+        calls.clear()
+        plugin = mi.PluginManager.instance().create_object(mi.Properties(cls.name))
+        assert type(plugin).__name__ == cls.__name__
+        assert calls == [], f"{cls.name}'s constructor called the loader: {calls}"
+    for mode in ("scanline", "hdr"):
+        mi.load_file(str(scene), mode=mode, res=8)
+    assert calls == [], f"the course scene's plugins called the loader: {calls}"

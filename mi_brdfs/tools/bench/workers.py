@@ -59,8 +59,7 @@ def materials(twin: str, side: str, n: int, res: int, spp: int, repeats: int) ->
 
     from ...render.frozen import FrozenRender
     start = time.perf_counter()
-    # parallel=False as in the CLI: Python plugins loaded in worker threads failed
-    # intermittently (bad_alloc).
+    # parallel=False as in the CLI (see its comment)
     scene = mi.load_dict(spheres_scene(twin, side, n, res), parallel=False)
     result = {"load_s": time.perf_counter() - start}
     first = measured(lambda: render_waited(scene, spp, seed=0))

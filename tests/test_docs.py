@@ -356,6 +356,25 @@ def test_explore_latencies_are_the_committed_run():
     assert f"answered in {fit:.1f} s" in guide
 
 
+def test_energy_costs_are_the_committed_run():
+    """The energy guide's render-time ratios (compensation on over off) are the
+    committed bench run's group ``energy``, to two decimals."""
+    rows = {r["name"]: r for r in committed("benchmarks", "results.json")["groups"]["energy"]}
+    with open(os.path.join(DOCS, "guide", "energy.md"), encoding="utf-8") as f:
+        guide = " ".join(f.read().split())
+    ratio = lambda name: f"{rows[name]['ratio']:.2f}×"                # noqa: E731
+    for label, name in (("EON", "oren_nayar (EON)"), ("phong", "phong"), ("blinn", "blinn"),
+                        ("ward", "ward"), ("anisotropic `ward`", "ward anisotropic"),
+                        ("anisotropic GGX × Smith", "cook_torrance ggx smith anisotropic")):
+        assert f"{label} {ratio(name)}" in guide, label
+    everything = [r["ratio"] for r in rows.values()]
+    assert f"{min(everything):.2f}–{max(everything):.2f}× for every compensated model" in guide
+    ct = [r["ratio"] for n, r in rows.items() if n.startswith("cook_torrance")]
+    assert f"cook_torrance {min(ct):.2f}–{max(ct):.2f}×" in guide
+    aniso = rows["ward anisotropic"]["execution_ratio"]
+    assert f"(kernel execution {aniso:.2f}×" in guide
+
+
 # ----------------------------------------------------------------------------
 #  The API page; repository paths
 # ----------------------------------------------------------------------------

@@ -8,7 +8,7 @@ lobe it belongs to. A lobe's value is most often a colour times a shape
 guards act on one Float per lane instead of one per colour channel. In
 scan-line mode each lobe is clamped per colour channel to [0, 1] before its
 weight (:func:`weighted`). Sampling picks a lobe in proportion to an
-estimate of its albedo (:func:`pick`) and the pdf is the exact mixture of
+estimate of its albedo (:class:`.mixture.Mixture`) and the pdf is the exact mixture of
 the lobes' densities (:func:`mixed`).
 """
 from __future__ import annotations
@@ -19,7 +19,7 @@ import drjit as dr
 import mitsuba as mi
 
 PDF_FLOOR = 1e-37                 # 1/pdf stays finite in float32 (the weight's scaling)
-WEIGHT_MAX = 1e12                 # sample weights above this are float32 failures (base.sample)
+WEIGHT_MAX = 1e12                 # sample weights above this are float32 failures (mixture.sample)
 # "On the surface": a viewer or light with cos θ <= HORIZON gets no reflection.
 # Above it every value is exact; below it the derivatives of near-mirror lobes
 # (alpha 1e-4: d pdf/d alpha ~ 1/(2 pi alpha³ cos θ)) would exceed float32.

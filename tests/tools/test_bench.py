@@ -341,6 +341,7 @@ def test_plugin_code_is_told_by_place_not_by_name(tmp_path):
     a filter on that name counted 0 calls."""
     import mitsuba as mi
     import mi_brdfs.bsdfs.base as base
+    import mi_brdfs.bsdfs.mixture as mixture
     util = os.path.join(os.path.dirname(mi.__file__), "python", "util.py")
     venv = tmp_path / "mi_brdfs" / ".venv" / "lib" / "python3.11" / "site-packages"
     assert anatomy.plugin_code(base.__file__)
@@ -349,7 +350,8 @@ def test_plugin_code_is_told_by_place_not_by_name(tmp_path):
     assert not anatomy.plugin_code(str(venv / "mi_brdfs" / "bsdfs" / "base.py"))  # another copy
     assert not anatomy.plugin_code(anatomy.__file__)             # the bench's own code
     assert not anatomy.plugin_code("~")                          # cProfile's built-ins
-    assert anatomy.bsdf_method((base.__file__, 1, "sample"))
+    assert anatomy.bsdf_method((mixture.__file__, 1, "sample"))
+    assert not anatomy.bsdf_method((base.__file__, 1, "sample"))     # not where it is defined
     assert not anatomy.bsdf_method((util, 1, "sample"))
 
 

@@ -106,6 +106,8 @@ class Worker:
             raise CostError(f"the process ended (exit code {self.process.exitcode})") from None
         if what == "error":
             raise CostError(value)
+        if what != kind:
+            raise CostError(f"answered {what!r} where {kind!r} was due")
         return value
 
     def time(self, seed: int) -> float:

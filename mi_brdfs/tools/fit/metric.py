@@ -182,10 +182,3 @@ def compress(x, objective: str):
     if objective == "cbrt":
         return dr.cbrt(x + CBRT_FLOOR) - CBRT_FLOOR ** (1.0 / 3.0)
     return dr.log(1.0 + x / LOG_FLOOR)
-
-
-def relative_error(target: np.ndarray, model: np.ndarray, weight: np.ndarray) -> float:
-    """E(model)/E(0) from eval values (N, 3) at the pairs (float64)."""
-    num = np.sum(weight * np.sum((model - target) ** 2, axis=1))
-    den = np.sum(weight * np.sum(target ** 2, axis=1))
-    return float(math.sqrt(num / den)) if den > 0 else math.nan

@@ -103,16 +103,6 @@ def relative_objective(values: np.ndarray, prob: Problem) -> float:
     return math.sqrt(num / prob.norm_c) if prob.norm_c > 0 else math.nan
 
 
-def objective_of(value, prob: Problem):
-    """E_c²/E_c²(0) of a Dr.Jit eval value (differentiable)."""
-    import drjit as dr
-    if prob.objective == "linear":
-        d = dr.sum(dr.square(value - prob.target), axis=0)
-        return dr.sum(prob.weight * d, axis=None) / prob.norm
-    d = dr.sum(dr.square(metric_module.compress(value, prob.objective) - prob.target_c), axis=0)
-    return dr.sum(prob.shown * d, axis=None) / prob.norm_c
-
-
 # ----------------------------------------------------------------------------
 #  The fit
 # ----------------------------------------------------------------------------
@@ -199,7 +189,6 @@ class Evaluator:
     def colours_by_least_squares(self, shape: dict) -> dict:
         """The colours that fit best (bounded linear least squares, per channel,
         on the eval values weighted as shown) with the other parameters at ``shape``."""
-        from scipy.optimize import lsq_linear
         colours = [f for f in self.free if f.colour]
         if not colours:
             return dict(shape)

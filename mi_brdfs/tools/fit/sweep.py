@@ -30,7 +30,7 @@ import multiprocessing
 import os
 import sys
 import time
-from typing import Callable, Iterator
+from typing import Iterator
 
 from . import models as M, targets as T
 from .task import Settings, fit_and_measure

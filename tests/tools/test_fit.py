@@ -240,3 +240,15 @@ def test_bad_input_gets_one_line(tmp_path, capsys, monkeypatch, args, message):
     assert code == 1 and len(err.splitlines()) == 1 and err.startswith("mi-brdfs fit: error: ")
     assert message in err
     assert not (tmp_path / "r").exists()
+
+
+def test_a_verdict_names_the_plugin_of_an_xml_target(tmp_path):
+    """An XML target's verdict compares costs with the plugin the file holds,
+    not with the file's path."""
+    from mi_brdfs.tools.fit import rank
+    xml = tmp_path / "mine.xml"
+    xml.write_text('<bsdf type="roughplastic" version="3.0.0">\n'
+                   '    <float name="alpha" value="0.2"/>\n</bsdf>\n')
+    assert rank.target_plugin(str(xml)) == "roughplastic"
+    assert rank.target_plugin("roughconductor:material=Au,alpha=0.3") == "roughconductor"
+    assert rank.target_plugin(str(tmp_path / "gone.xml")) == "the target"

@@ -72,11 +72,15 @@ def front(records: list[dict]) -> list[dict]:
     return [b for b in fits if not any(dominates(a, b) for a in fits if a is not b)]
 
 
-def target_plugin(spec: str, xml: str | None = None) -> str:
-    """The target's plugin name, from its shorthand or its XML."""
-    if xml:
+def target_plugin(spec: str) -> str:
+    """The target's plugin name, from its shorthand or from the XML file it names."""
+    if spec.lower().endswith(".xml"):
         import re
-        found = re.search(r'<bsdf[^>]*type="([^"]+)"', xml)
+        try:
+            with open(spec, encoding="utf-8") as f:
+                found = re.search(r'<bsdf[^>]*type="([^"]+)"', f.read())
+        except OSError:
+            found = None
         return found.group(1) if found else "the target"
     return spec.split(":", 1)[0]
 

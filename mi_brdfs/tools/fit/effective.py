@@ -128,20 +128,12 @@ def features(target_bsdf, pairs) -> dict:
     0° and at 80° incidence, :func:`specular_colour`, and the share lost) and
     ``anisotropy`` (the relative change of eval at ``pairs`` when both
     directions turn 90° about the normal)."""
-    import drjit as dr
-    import mitsuba as mi
-
-    from .optimise import values_of
+    from .optimise import eval_pairs
     c0, c80 = (_chroma(specular_colour(target_bsdf, a)) for a in WHITENING_DEG)
     lost = (c0 - c80) / c0 if c0 > 0 else 0.0
     turn = lambda w: np.stack([-w[:, 1], w[:, 0], w[:, 2]], axis=1)
-    n = len(pairs.wi)
-    evals = []
-    for wi, wo in ((pairs.wi, pairs.wo), (turn(pairs.wi), turn(pairs.wo))):
-        si = dr.zeros(mi.SurfaceInteraction3f, n)
-        si.wi = from_numpy(mi.Vector3f, wi.T)
-        si.uv = mi.Point2f(0.5, 0.5)
-        evals.append(values_of(target_bsdf, si, from_numpy(mi.Vector3f, wo.T)))
+    evals = [eval_pairs(target_bsdf, wi, wo)
+             for wi, wo in ((pairs.wi, pairs.wo), (turn(pairs.wi), turn(pairs.wo)))]
     w = pairs.weight[:, None]
     num = float(np.sum(w * (evals[0] - evals[1]) ** 2))
     den = float(np.sum(w * evals[0] ** 2))

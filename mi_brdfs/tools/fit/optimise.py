@@ -59,13 +59,8 @@ class Problem:
 
 def problem(target_bsdf, pairs, objective: str = "cbrt") -> Problem:
     """The target's values at ``pairs`` (non-finite values: the pair left out)."""
-    import drjit as dr
     import mitsuba as mi
-    n = len(pairs.wi)
-    si = dr.zeros(mi.SurfaceInteraction3f, n)
-    si.wi = from_numpy(mi.Vector3f, pairs.wi.T)
-    si.uv = mi.Point2f(0.5, 0.5)
-    wo = from_numpy(mi.Vector3f, pairs.wo.T)
+    si, wo = surface_at(pairs.wi), from_numpy(mi.Vector3f, pairs.wo.T)
     values = values_of(target_bsdf, si, wo)
     finite = np.isfinite(values).all(axis=1)
     values = np.where(finite[:, None], values, 0.0)
@@ -78,6 +73,23 @@ def problem(target_bsdf, pairs, objective: str = "cbrt") -> Problem:
                    from_numpy(mi.Color3f, values.T), norm, from_numpy(mi.Float, shown),
                    from_numpy(mi.Color3f, compressed.T), norm_c,
                    {"weight": weight, "target": values, "shown": shown, "target_c": compressed})
+
+
+def surface_at(wi: np.ndarray):
+    """A surface interaction per viewer direction (N, 3), local frame, uv at
+    the centre (where a texture of the target is read)."""
+    import drjit as dr
+    import mitsuba as mi
+    si = dr.zeros(mi.SurfaceInteraction3f, len(wi))
+    si.wi = from_numpy(mi.Vector3f, wi.T)
+    si.uv = mi.Point2f(0.5, 0.5)
+    return si
+
+
+def eval_pairs(bsdf, wi: np.ndarray, wo: np.ndarray) -> np.ndarray:
+    """eval at the direction pairs (wi, wo), both (N, 3), as (N, 3) float64."""
+    import mitsuba as mi
+    return values_of(bsdf, surface_at(wi), from_numpy(mi.Vector3f, wo.T))
 
 
 def values_of(bsdf, si, wo) -> np.ndarray:

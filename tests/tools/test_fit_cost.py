@@ -80,3 +80,35 @@ def test_the_ranking_follows_flip_and_prefers_the_cheaper_of_a_tie():
     line = rank.verdict(rows, "roughconductor")
     assert line == ("y: FLIP 0.102, 1.20× (1.10–1.30) the cost of roughconductor; "
                     "x is 1.00× (0.90–1.05) the cost at FLIP 0.200")
+
+
+def test_the_readme_table_names_the_first_model_and_a_cheaper_one_beyond_the_noise():
+    """trade.summary, the README's table: per material the first-ranked model
+    and the best of those whose whole interval is below its (w overlaps y:
+    not cheaper; x and v are, v the better); a material every fit of which
+    failed says so."""
+    from mi_brdfs.tools.fit import trade
+    rows = [fit("x", 0.200, 1.0, 0.9, 1.05), fit("y", 0.102, 1.2, 1.1, 1.3),
+            fit("z", 0.100, 2.0, 1.9, 2.1), fit("w", 0.150, 1.12, 1.08, 1.15),
+            fit("v", 0.180, 0.5, 0.45, 0.55)]
+    rows = [{**r, "target": "t:a"} for r in rows] + [{"target": "t:b", "model": "u", "error": "boom"}]
+    lines = trade.summary(rows, {"t:a": "A"}).splitlines()
+    assert lines[2] == ("| A | `y` | 0.102 | 1.20× (1.10–1.30) | "
+                        "`v`: FLIP 0.180 at 0.50× (0.45–0.55) |")
+    assert lines[3] == "| t:b | every fit failed | – | – | – |"
+    assert len(lines) == 4
+
+
+def test_compensation_is_counted_per_pair_fitted_both_ways():
+    """trade.compensation_effect: a compensated fit is worse (or better) than
+    the same model without compensation on the same material only beyond the
+    ranking's tie; a model fitted one way only, or a failed fit, is no pair."""
+    from mi_brdfs.tools.fit import trade
+    rows = [("t:a", "phong", 0.10), ("t:a", "phong+ec", 0.20),      # worse
+            ("t:a", "ward", 0.10), ("t:a", "ward+ec", 0.103),       # a tie
+            ("t:b", "phong", 0.30), ("t:b", "phong+ec", 0.20),      # better
+            ("t:b", "blinn+ec", 0.10)]                              # no pair
+    records = [{**fit(m, flip), "target": t} for t, m, flip in rows]
+    records.append({"target": "t:b", "model": "ward", "error": "boom"})
+    records.append({**fit("ward+ec", 0.9), "target": "t:b"})
+    assert trade.compensation_effect(records) == (1, 1, 3)

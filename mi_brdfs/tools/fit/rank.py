@@ -85,7 +85,15 @@ def target_plugin(spec: str) -> str:
     return spec.split(":", 1)[0]
 
 
-def _cost_text(r: dict) -> str:
+def cheaper_alternative(order: list[dict]) -> dict | None:
+    """Of the fits that cost less than the first-ranked one beyond the
+    timing's noise, the best; None if there is none."""
+    cheap = [r for r in order[1:] if cheaper(r, order[0])]
+    return min(cheap, key=quality) if cheap else None
+
+
+def cost_text(r: dict) -> str:
+    """A fit's cost as the report and the verdict write it: ``0.96× (0.93–0.99)``."""
     if r.get("cost_ratio") is None:
         return "cost not measured"
     text = f"{r['cost_ratio']:.2f}×"
@@ -103,11 +111,10 @@ def verdict(records: list[dict], plugin: str) -> str:
     best = order[0]
     if best.get("cost_ratio") is None:
         return f"{best['model']}: FLIP {quality(best):.3f} (render cost not measured)"
-    line = (f"{best['model']}: FLIP {quality(best):.3f}, {_cost_text(best)} the cost of {plugin}")
-    cheap = [r for r in order if cheaper(r, best)]
-    if cheap:
-        alt = min(cheap, key=quality)
-        line += f"; {alt['model']} is {_cost_text(alt)} the cost at FLIP {quality(alt):.3f}"
+    line = (f"{best['model']}: FLIP {quality(best):.3f}, {cost_text(best)} the cost of {plugin}")
+    alt = cheaper_alternative(order)
+    if alt is not None:
+        line += f"; {alt['model']} is {cost_text(alt)} the cost at FLIP {quality(alt):.3f}"
     elif best.get("cost_low") is not None:
         line += "; no model costs less beyond the noise of the timing"
     return line

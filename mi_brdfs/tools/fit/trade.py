@@ -117,25 +117,78 @@ def answers(records: list[dict], labels: dict[str, str] | None = None) -> str:
     """Per material: the verdict (:func:`.rank.verdict`), how far the
     first-ranked fit's FLIP is from the best FLIP of any fit, and for a
     conductor the largest channel difference between the first-ranked fit's
-    colour at normal incidence and the material's F0."""
-    from . import effective, rank, targets as T
+    colour at normal incidence and the material's F0 (:func:`checks`)."""
+    from . import rank
     labels = labels or {}
     lines = ["| material | verdict | first-ranked FLIP - best FLIP | conductor: F0 error |",
              "|---|---|---|---|"]
-    for spec in dict.fromkeys(r["target"] for r in records):
-        mine = [r for r in records if r["target"] == spec]
-        order = rank.ranked(mine)
-        if not order:
+    for spec, gap, f0_error in checks(records):
+        if gap is None:
             lines.append(f"| {labels.get(spec, spec)} | every fit failed | – | – |")
+            continue
+        mine = [r for r in records if r["target"] == spec]
+        error = "–" if f0_error is None else f"{f0_error:.3f}"
+        lines.append(f"| {labels.get(spec, spec)} | {rank.verdict(mine, rank.target_plugin(spec))} "
+                     f"| {gap:.3f} | {error} |")
+    return "\n".join(lines) + "\n"
+
+
+def checks(records: list[dict]) -> list[tuple[str, float | None, float | None]]:
+    """Per material (spec): the first-ranked fit's FLIP minus the best FLIP of
+    any fit (None if every fit failed), and for a conductor the largest
+    channel difference between the first-ranked fit's colour at normal
+    incidence and the material's F0 (else None)."""
+    from . import effective, rank, targets as T
+    out = []
+    for spec in dict.fromkeys(r["target"] for r in records):
+        order = rank.ranked([r for r in records if r["target"] == spec])
+        if not order:
+            out.append((spec, None, None))
             continue
         gap = rank.quality(order[0]) - min(rank.quality(r) for r in order)
         f0 = effective.conductor_f0(T.parse([spec])[0])
         colour = effective.normal_colour(order[0])
-        error = ("–" if f0 is None or colour is None else
-                 f"{max(abs(a - b) for a, b in zip(colour, f0)):.3f}")
-        lines.append(f"| {labels.get(spec, spec)} | {rank.verdict(mine, rank.target_plugin(spec))} "
-                     f"| {gap:.3f} | {error} |")
-    return "\n".join(lines) + "\n"
+        error = (None if f0 is None or colour is None
+                 else max(abs(a - b) for a, b in zip(colour, f0)))
+        out.append((spec, gap, error))
+    return out
+
+
+def compensation_effect(records: list[dict]) -> tuple[int, int, int]:
+    """Over the (material, model) pairs fitted both with and without energy
+    compensation: in how many the compensated fit's FLIP is worse by more
+    than :data:`.rank.TIE_FLIP`, in how many better by more, of how many."""
+    from .models import EC
+    from . import rank
+    flip = {(r["target"], r["model"]): rank.quality(r) for r in rank.ok(records)}
+    pairs = [(flip[(t, m)], flip[(t, m[:-len(EC)])]) for t, m in flip
+             if m.endswith(EC) and (t, m[:-len(EC)]) in flip]
+    worse = sum(a > b + rank.TIE_FLIP for a, b in pairs)
+    better = sum(a < b - rank.TIE_FLIP for a, b in pairs)
+    return worse, better, len(pairs)
+
+
+def summary(records: list[dict], labels: dict[str, str] | None = None) -> str:
+    """The README's "which model for my material" table: per material, the
+    first-ranked model with its image FLIP and render cost (× the material's
+    own plugin, 90 % interval), and the best model that costs less beyond the
+    timing's noise (:func:`.rank.cheaper_alternative`)."""
+    from . import rank
+    labels = labels or {}
+    lines = ["| material | first-ranked model | FLIP | cost × (90 %) | cheaper beyond the noise |",
+             "|---|---|---|---|---|"]
+    for spec in dict.fromkeys(r["target"] for r in records):
+        order = rank.ranked([r for r in records if r["target"] == spec])
+        if not order:
+            lines.append(f"| {labels.get(spec, spec)} | every fit failed | – | – | – |")
+            continue
+        best, alt = order[0], rank.cheaper_alternative(order)
+        cost = "–" if best.get("cost_ratio") is None else rank.cost_text(best)
+        other = ("–" if alt is None else
+                 f"`{alt['model']}`: FLIP {rank.quality(alt):.3f} at {rank.cost_text(alt)}")
+        lines.append(f"| {labels.get(spec, spec)} | `{best['model']}` | "
+                     f"{rank.quality(best):.3f} | {cost} | {other} |")
+    return "\n".join(lines)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -298,10 +298,13 @@ def test_fit_table_is_the_committed_sweep(site):
 
 def test_fit_guide_figures_are_the_committed_sweep(site):
     """The fit guide's prose is the committed records': every model fitted
-    there is named, and what it says of the brushed aluminium holds in them
+    there is named, and what it says holds in them: of the brushed aluminium
     (the anisotropic Cook-Torrance the closest image by far, with the
-    target's roughnesses; anisotropic Ward next; every isotropic model
-    behind both)."""
+    target's roughnesses; Ashikhmin-Shirley and anisotropic Ward next; every
+    isotropic model behind them), of the conductors (each one's own
+    microfacet D first) and of energy compensation (worse, on these
+    single-scattering targets, far more often than better)."""
+    from mi_brdfs.tools.fit import rank, trade
     records = [r for r in committed("benchmarks", "trade", "fits.json") if "error" not in r]
     assert records
     guide = " ".join(text_of(site, "guide/fit.html").split())
@@ -309,14 +312,23 @@ def test_fit_guide_figures_are_the_committed_sweep(site):
         assert r["model"] in guide, r["model"]
     brushed = sorted((r for r in records if "alpha_u=0.05,alpha_v=0.3" in r["target"]),
                      key=lambda r: r["image_flip"])
-    assert [r["model"] for r in brushed[:2]] == ["cook_torrance/ggx/smith/anisotropic",
-                                                 "ward/anisotropic"]
+    assert brushed[0]["model"] == "cook_torrance/ggx/smith/anisotropic"
+    assert {r["model"] for r in brushed[1:3]} == {"ashikhmin_shirley", "ward/anisotropic"}
     assert brushed[0]["image_flip"] < 0.1 * brushed[1]["image_flip"]          # "by far"
     fitted = brushed[0]["parameters"]
     assert fitted["alpha_u"] == pytest.approx(0.05, rel=0.02)
     assert fitted["alpha_v"] == pytest.approx(0.3, rel=0.02)
     assert "recovers the target" in guide
-    assert "its image is the closest by far; anisotropic Ward gets part of the way" in guide
+    assert ("its image is the closest by far; Ashikhmin-Shirley and anisotropic Ward get part "
+            "of the way") in guide
+    for spec in dict.fromkeys(r["target"] for r in records):
+        first = rank.ranked([r for r in records if r["target"] == spec])[0]["model"]
+        if spec.startswith("roughconductor:material=") and "distribution" not in spec:
+            assert first.startswith("cook_torrance/beckmann/"), (spec, first)  # Beckmann: the default
+        elif spec.startswith("roughconductor:") and "alpha_u" not in spec:
+            assert first == "cook_torrance/ggx/smith", (spec, first)
+    worse, better, pairs = trade.compensation_effect(records)
+    assert worse > 10 * better and f"worse in {worse} of the {pairs}" in guide
 
 
 def test_reports_are_pages_of_the_site_with_their_pictures(site):

@@ -83,33 +83,47 @@ def _trade_targets() -> int:
     return len(dict.fromkeys(r["target"] for r in fits()))
 
 
-def _trade_best(prefix: str) -> dict[str, dict]:
-    """The best fit (lowest BRDF error) of each target whose spec starts with
-    ``prefix``."""
-    best = {}
-    for r in fits():
-        if r["target"].startswith(prefix) and ("error" not in r) and (
-                r["target"] not in best or r["brdf_error"] < best[r["target"]]["brdf_error"]):
-            best[r["target"]] = r
-    if not best:
-        raise ValueError(f"no committed fit of a target {prefix!r}")
-    return best
+def _trade_checks() -> list:
+    from mi_brdfs.tools.fit import trade
+    return trade.checks(fits())
 
 
-def _trade_range(*prefixes: str) -> str:
-    """The lowest BRDF errors of these targets, from the smallest to the largest."""
-    errors = sorted(r["brdf_error"] for p in prefixes for r in _trade_best(p).values())
-    return f"{errors[0]:.2g}–{errors[-1]:.2g}"
+def _trade_first(conductors: bool | None = None, plugin: str | None = None) -> list[dict]:
+    """The first-ranked fit of each material (of the conductors only, or of a
+    target plugin only)."""
+    from mi_brdfs.tools.fit import rank
+    f0 = {spec: error is not None for spec, _, error in _trade_checks()}
+    out = []
+    for spec in dict.fromkeys(r["target"] for r in fits()):
+        if (conductors is not None and f0[spec] != conductors) or (
+                plugin is not None and rank.target_plugin(spec) != plugin):
+            continue
+        order = rank.ranked([r for r in fits() if r["target"] == spec])
+        if order:
+            out.append(order[0])
+    return out
 
 
-def _trade_fit(target: str, model: str | None = None) -> dict:
-    """One target's best fit, or its fit by ``model``."""
-    if model is None:
-        return _trade_best(target)[target]
-    return next(r for r in fits() if r["target"] == target and r["model"] == model)
+def _span(values, spec=".2f") -> str:
+    return f"{min(values):{spec}}–{max(values):{spec}}"
 
 
-PLASTIC = "roughplastic:alpha=0.1,diffuse_reflectance=[0.6,0.2,0.1]"
+def _trade_cost_phrase() -> str:
+    """How the committed sweep's costs were timed: the load, and how many
+    intervals reached the tolerance within the rounds allowed."""
+    timed = [r for r in fits() if r.get("cost_low")]
+    load = [r["cost_load"] for r in timed]
+    tight = sum(r["cost_high"] / r["cost_low"] <= 1.05 for r in timed)
+    return (f"load average {min(load):.1f}–{max(load):.1f}; {tight} of the {len(timed)} "
+            f"intervals reached high/low ≤ 1.05 within 40 rounds, the others stopped at "
+            f"{max(r['cost_high'] / r['cost_low'] for r in timed):.3f} at most")
+
+
+def _trade_compensation_phrase() -> str:
+    from mi_brdfs.tools.fit import trade
+    worse, better, pairs = trade.compensation_effect(fits())
+    return (f"worse in {worse} of the {pairs} (material, model) pairs fitted both ways, "
+            f"better in {better}")
 
 
 def _fit_models() -> int:
@@ -130,13 +144,13 @@ RESULTS = {
     "trade.fits": lambda: str(len(fits())),
     "trade.targets": lambda: str(_trade_targets()),
     "trade.models": lambda: str(_fit_models()),
-    "trade.gold_copper": lambda: _trade_range("roughconductor:material=Au",
-                                              "roughconductor:material=Cu"),
-    "trade.aluminium": lambda: _trade_range("roughconductor:material=Al"),
-    "trade.plastic.model": lambda: _trade_fit(PLASTIC)["model"],
-    "trade.plastic.error": lambda: f"{_trade_fit(PLASTIC)['brdf_error']:.2g}",
-    "trade.plastic.flip": lambda: f"{_trade_fit(PLASTIC)['image_flip']:.2f}",
-    "trade.plastic.lambert_flip": lambda: f"{_trade_fit(PLASTIC, 'lambert')['image_flip']:.2f}",
+    "trade.costs": _trade_cost_phrase,
+    "trade.compensation": _trade_compensation_phrase,
+    "trade.own_cost": lambda: _span([r["cost_ratio"] for r in _trade_first(conductors=True)]),
+    "trade.plastics": lambda: _span([r["image_flip"] for r in _trade_first(plugin="roughplastic")]),
+    "trade.tie": lambda: f"{max(g for _, g, _ in _trade_checks() if g is not None):.3f}",
+    "trade.f0": lambda: f"{max(e for _, _, e in _trade_checks() if e is not None):.3f}",
+    "trade.conductors": lambda: str(sum(e is not None for _, _, e in _trade_checks())),
     "bench.machine": lambda: ", ".join(f"{k} {v}" for k, v in bench()["machine"].items()),
 }
 

@@ -8,8 +8,11 @@
    file lacks or holds with other axes (``python -m mi_brdfs.tools.tables
    --only ...``; the tables already there are kept: rebuild one on purpose
    with that command);
-2. the README's table of plugins, between its ``<!-- plugins -->`` markers,
-   from each module's title line and its cases' ``checked``;
+2. the README's tables, each between its markers: the plugins (``<!--
+   plugins -->``, from each module's title line and its cases' ``checked``)
+   and which model for which material (``<!-- which-model -->``, from the
+   committed trade sweep ``docs/benchmarks/trade/fits.json``, which
+   ``python -m mi_brdfs.tools.fit.trade -o docs/benchmarks/trade`` makes);
 3. the committed validation report (``mi-brdfs validate -o docs/validation``),
    where every model's χ², furnace, negative control and lobe plot come from
    its cases (``--check`` compares what the report ran with what the cases
@@ -32,7 +35,7 @@ import sys
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 README = os.path.join(ROOT, "README.md")
 REPORT = os.path.join(ROOT, "docs", "validation", "results.json")
-BEGIN, END = "<!-- plugins -->", "<!-- /plugins -->"
+TRADE = os.path.join(ROOT, "docs", "benchmarks", "trade", "fits.json")
 
 
 def plugin_table() -> str:
@@ -48,9 +51,26 @@ def plugin_table() -> str:
     return "\n".join(rows)
 
 
-def readme_with_table(text: str) -> str:
-    begin, end = text.index(BEGIN) + len(BEGIN), text.index(END)
-    return text[:begin] + "\n" + plugin_table() + "\n" + text[end:]
+def which_model_table() -> str:
+    """The README's table "which model for my material", from the committed
+    trade sweep."""
+    from .fit import trade
+    with open(TRADE, encoding="utf-8") as f:
+        records = json.load(f)
+    return trade.summary(records, dict((spec, label) for label, spec in trade.TARGETS))
+
+
+TABLES = {"plugins": plugin_table, "which-model": which_model_table}   # README marker: its table
+
+
+def readme_with_tables(text: str) -> str:
+    """The README with every table of :data:`TABLES` made afresh between its
+    ``<!-- NAME -->`` and ``<!-- /NAME -->`` markers."""
+    for name, make in TABLES.items():
+        begin = text.index(f"<!-- {name} -->") + len(f"<!-- {name} -->")
+        end = text.index(f"<!-- /{name} -->")
+        text = text[:begin] + "\n" + make() + "\n" + text[end:]
+    return text
 
 
 def missing_tables() -> list[str]:
@@ -104,7 +124,7 @@ def stale_report() -> list[str]:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="python -m mi_brdfs.tools.regenerate",
-        description="Regenerate the tables, the README's plugin table and the validation "
+        description="Regenerate the albedo tables, the README's tables and the validation "
                     "report from the models' modules.")
     parser.add_argument("--check", action="store_true",
                         help="say what is out of date and exit 1 if anything is; change nothing")
@@ -117,8 +137,8 @@ def main(argv: list[str] | None = None) -> int:
         stale.append(f"albedo tables missing: {', '.join(tables)}")
     with open(README, encoding="utf-8") as f:
         readme = f.read()
-    if readme_with_table(readme) != readme:
-        stale.append("README.md's plugin table")
+    if readme_with_tables(readme) != readme:
+        stale.append("README.md's tables")
     if not args.no_report:
         stale += stale_report()
     if args.check:
@@ -128,14 +148,14 @@ def main(argv: list[str] | None = None) -> int:
     if tables:
         subprocess.run([sys.executable, "-m", "mi_brdfs.tools.tables", "--only", *tables],
                        check=True)
-    if readme_with_table(readme) != readme:
+    if readme_with_tables(readme) != readme:
         from ..render.exr import write_atomically
 
         def write(tmp: str) -> None:
             with open(tmp, "w", encoding="utf-8") as f:
-                f.write(readme_with_table(readme))
+                f.write(readme_with_tables(readme))
         write_atomically(README, write)
-        print("wrote README.md's plugin table")
+        print("wrote README.md's tables")
     if not args.no_report:
         subprocess.run([sys.executable, "-m", "mi_brdfs", "validate", "-o",
                         os.path.join(ROOT, "docs", "validation")], check=True)

@@ -149,13 +149,14 @@ def test_broken_cases_fail_their_own_tests_only(tmp_path):
 
 
 def test_what_is_made_from_the_modules_is_up_to_date():
-    """The README's plugin table and the shipped albedo tables are what
+    """The README's tables (the plugins; which model for which material, from
+    the committed trade sweep) and the shipped albedo tables are what
     ``python -m mi_brdfs.tools.regenerate`` makes from the models' modules."""
     from mi_brdfs.tools import regenerate
     with open(regenerate.README, encoding="utf-8") as f:
         readme = f.read()
-    assert regenerate.readme_with_table(readme) == readme, \
-        "README.md's plugin table is stale: python -m mi_brdfs.tools.regenerate"
+    assert regenerate.readme_with_tables(readme) == readme, \
+        "README.md's tables are stale: python -m mi_brdfs.tools.regenerate"
     assert regenerate.missing_tables() == []
     assert regenerate.stale_report() == [], "python -m mi_brdfs.tools.regenerate"
     for cls in PLUGINS:

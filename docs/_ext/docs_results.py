@@ -111,11 +111,14 @@ def _span(values, spec=".2f") -> str:
 def _trade_cost_phrase() -> str:
     """How the committed sweep's costs were timed: the load, and how many
     intervals reached the tolerance within the rounds allowed."""
+    from mi_brdfs.tools.fit import FULL
     timed = [r for r in fits() if r.get("cost_low")]
     load = [r["cost_load"] for r in timed]
-    tight = sum(r["cost_high"] / r["cost_low"] <= 1.05 for r in timed)
+    limit = 1.0 + FULL.cost_tolerance
+    tight = sum(r["cost_high"] / r["cost_low"] <= limit for r in timed)
     return (f"load average {min(load):.1f}–{max(load):.1f}; {tight} of the {len(timed)} "
-            f"intervals reached high/low ≤ 1.05 within 40 rounds, the others stopped at "
+            f"intervals reached high/low ≤ {limit:g} within {FULL.cost_rounds[1]} rounds, "
+            f"the others stopped at "
             f"{max(r['cost_high'] / r['cost_low'] for r in timed):.3f} at most")
 
 

@@ -93,7 +93,8 @@ def cheaper_alternative(order: list[dict]) -> dict | None:
 
 
 def cost_text(r: dict) -> str:
-    """A fit's cost as the report and the verdict write it: ``0.96× (0.93–0.99)``."""
+    """A fit's cost as the verdict and the README's table write it:
+    ``0.96× (0.93–0.99)``."""
     if r.get("cost_ratio") is None:
         return "cost not measured"
     text = f"{r['cost_ratio']:.2f}×"

@@ -328,6 +328,26 @@ def test_compensated_slice_follows_the_walk(distribution, geometry, alpha, theta
     assert compensated <= bound and compensated <= single / 2.5, (compensated, single)
 
 
+def test_the_separable_lobe_puts_grazing_light_where_the_walk_has_none():
+    """A documented limitation, pinned (docs/guide/limitations.md): the
+    compensation lobe, separable in θ_i and θ_o, adds the same light at a
+    grazing pair whatever the azimuth — as much at retro-reflection and side
+    on as at the mirror pair (to float precision) — while the walk's multiple
+    scattering at α 0.3 is nil at the first two and above 1 sr⁻¹ at the third,
+    over 15 times what the lobe adds there.
+    A lobe that follows the walk's directions fails this test, and the
+    limitation's text goes with it."""
+    rows = groundtruth.grazing_difference("beckmann", 0.3, 1.0, paths=20_000)
+    at = {(r["pair"], r["theta_i"]): r for r in rows}
+    for theta in (70, 80, 85):
+        retro, mirror = at[("retro-reflection", theta)], at[("mirror", theta)]
+        assert retro["added"] == pytest.approx(mirror["added"], rel=1e-4) and retro["added"] > 0.01
+        assert retro["walk"] < 1e-12 and mirror["walk"] > max(1.0, 15 * mirror["added"])
+        assert mirror["walk"] > 10 * mirror["walk_error"]
+    assert at[("side-on", 80)]["added"] == pytest.approx(at[("mirror", 80)]["added"], rel=1e-4)
+    assert at[("side-on", 80)]["walk"] < 1e-12
+
+
 # ----------------------------------------------------------------------------
 #  Colours
 # ----------------------------------------------------------------------------

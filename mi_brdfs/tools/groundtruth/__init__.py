@@ -34,7 +34,8 @@ Needs SciPy (the ``reports`` extra).
 """
 from .microsurface import (DISTRIBUTIONS, Alpha, d, d_visible, fresnel, lam, projected_area,
                            sample_visible, single_scattering)
-from .report import (RESIDUAL_BOUND, compensated_albedo, reference, reference_agreement,
+from .report import (RESIDUAL_BOUND, compensated_albedo, grazing_difference, reference,
+                     reference_agreement,
                      reference_anisotropic, report_html, report_section, residuals,
                      residuals_anisotropic, slice_difference)
 from .walk import MAX_ORDER, albedo, brdf, directions, table, walk
@@ -43,4 +44,4 @@ __all__ = ["DISTRIBUTIONS", "MAX_ORDER", "RESIDUAL_BOUND", "Alpha", "albedo", "b
            "d_visible", "directions", "fresnel", "lam", "projected_area", "sample_visible",
            "single_scattering", "table", "walk", "compensated_albedo", "reference",
            "reference_agreement", "reference_anisotropic", "report_html", "report_section",
-           "residuals", "residuals_anisotropic", "slice_difference"]
+           "residuals", "residuals_anisotropic", "slice_difference", "grazing_difference"]

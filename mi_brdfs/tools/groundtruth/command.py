@@ -10,7 +10,7 @@ import sys
 import numpy as np
 
 from .microsurface import DISTRIBUTIONS, Alpha
-from .report import (compensated_albedo, reference, reference_agreement,
+from .report import (compensated_albedo, grazing_difference, reference, reference_agreement,
                      reference_anisotropic, residuals, residuals_anisotropic, slice_difference)
 from .walk import albedo
 
@@ -37,6 +37,10 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--decomposition", action="store_true",
                         help="print what single scattering misses: the separable E_ss, the "
                              "height-correlated first bounce E_1 and the bounces k >= 2")
+    parser.add_argument("--grazing", action="store_true",
+                        help="print what compensation adds at grazing pairs (retro-reflection, "
+                             "side-on, mirror) against the walk's multiple scattering there "
+                             "(Beckmann x Smith, alpha 0.3, F0 1 and 0.7)")
     parser.add_argument("--anisotropic", action="store_true",
                         help="print the walk's albedo for anisotropic roughness "
                              f"(alpha_x, alpha_y) in {list(ANISOTROPIC)}, F0 1 and 0.5, "
@@ -71,6 +75,18 @@ def print_slices() -> None:
                     print(f"{distribution}/{geometry}, alpha {alpha}, F0 0.6, theta_i {theta} "
                           f"deg: plane-of-incidence slice vs the walk, relative L1: "
                           f"compensated {100 * comp:.1f} %, single scattering {100 * single:.1f} %")
+
+
+def print_grazing(paths: int) -> None:
+    print(f"cook_torrance beckmann/smith, alpha 0.3: f (1/sr) that energy compensation adds, "
+          f"against the walk's multiple scattering (bounces >= 2, +- standard error, {paths} "
+          "paths)")
+    for f0 in (1.0, 0.7):
+        for r in grazing_difference("beckmann", 0.3, f0, paths):
+            where = f"{r['pair']} {r['theta_i']}/{r['theta_o']} deg" + (
+                f", azimuths {r['dphi']} deg apart" if r["pair"] == "side-on" else "")
+            print(f"F0 {f0}, {where}: compensation adds {r['added']:.4f}, the walk's "
+                  f"{r['walk']:.3g} +- {r['walk_error']:.1g}")
 
 
 def print_anisotropic(paths: int) -> None:
@@ -122,9 +138,9 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     log = lambda text: print(text, file=sys.stderr)
     if not (args.output or args.residuals or args.agreement or args.slices
-            or args.decomposition or args.anisotropic):
+            or args.decomposition or args.anisotropic or args.grazing):
         parser.error("nothing to do: give -o FILE, --residuals, --agreement, --slices, "
-                     "--decomposition or --anisotropic")
+                     "--grazing, --decomposition or --anisotropic")
     if args.paths < 2:
         parser.error(f"--paths {args.paths}: at least 2 paths per point")
     if args.agreement and not args.reference:
@@ -145,12 +161,14 @@ def main(argv: list[str] | None = None) -> int:
             check_output_file(args.output)
         except OutputError as error:
             parser.error(str(error))
-    if args.decomposition or args.slices or args.residuals:
+    if args.decomposition or args.slices or args.residuals or args.grazing:
         import mi_brdfs  # noqa: F401  (variant, plugins)
     if args.decomposition:
         print_decomposition(args.paths)
     if args.slices:
         print_slices()
+    if args.grazing:
+        print_grazing(args.paths)
     if args.anisotropic:
         print_anisotropic(args.paths)
     if args.agreement:

@@ -338,3 +338,41 @@ def slice_difference(distribution: str, geometry: str, alpha: float, theta: floa
     return (float(np.abs(comp - walked).sum() / walked.sum()),
             float(np.abs(single - walked).sum() / walked.sum()))
 
+
+
+GRAZING_PAIRS = (        # (name, θ_i, θ_o, φ_o - φ_i in degrees): both directions grazing
+    ("retro-reflection", 60, 60, 0), ("retro-reflection", 70, 70, 0),
+    ("retro-reflection", 80, 80, 0), ("retro-reflection", 85, 85, 0),
+    ("side-on", 80, 80, 90),
+    ("mirror", 70, 70, 180), ("mirror", 80, 80, 180), ("mirror", 85, 85, 180))
+
+
+def grazing_difference(distribution: str = "beckmann", alpha: float = 0.3, f0: float = 1.0,
+                       paths: int = 200_000) -> list[dict]:
+    """Where the compensation lobe puts the light of grazing directions,
+    against the walk: at each of :data:`GRAZING_PAIRS`, the BRDF f (eval / cos
+    θ_o) that compensation adds to cook_torrance with Smith's G (k = 0, white
+    m_S) and the walk's multiple scattering there (bounces >= 2, next-event
+    estimation, with its standard error). The lobe, separable in θ_i and θ_o,
+    adds the same at every azimuth; the walk's is concentrated near the
+    mirror direction."""
+    import mitsuba as mi
+
+    from ..fit.optimise import eval_pairs
+    from .walk import MAX_ORDER
+
+    def direction(theta, phi):
+        t, p = math.radians(theta), math.radians(phi)
+        return [math.sin(t) * math.cos(p), math.sin(t) * math.sin(p), math.cos(t)]
+    wi = np.array([direction(ti, 0) for _, ti, _, _ in GRAZING_PAIRS])
+    wo = np.array([direction(to, dphi) for _, _, to, dphi in GRAZING_PAIRS])
+    config = {"type": "cook_torrance", "distribution": distribution, "geometry": "smith",
+              "alpha": alpha, "k": 0.0, "f0": f0, "specular_reflectance": 1.0}
+    added = (eval_pairs(mi.load_dict({**config, "energy_compensation": True}), wi, wo)
+             - eval_pairs(mi.load_dict(config), wi, wo))[:, 0] / wo[:, 2]
+    walked, error = brdf(distribution, wi, wo, alpha, f0, paths=paths, seed=5,
+                         orders=(2, MAX_ORDER), error=True)
+    return [{"pair": name, "theta_i": ti, "theta_o": to, "dphi": dphi, "added": float(a),
+             "walk": float(w / wo[k, 2]), "walk_error": float(e / wo[k, 2])}
+            for k, ((name, ti, to, dphi), a, w, e)
+            in enumerate(zip(GRAZING_PAIRS, added, walked, error))]

@@ -358,7 +358,7 @@ def grazing_difference(distribution: str = "beckmann", alpha: float = 0.3, f0: f
     mirror direction."""
     import mitsuba as mi
 
-    from ..fit.optimise import eval_pairs
+    from ..analysis import eval_at_viewer
     from .walk import MAX_ORDER
 
     def direction(theta, phi):
@@ -368,8 +368,10 @@ def grazing_difference(distribution: str = "beckmann", alpha: float = 0.3, f0: f
     wo = np.array([direction(to, dphi) for _, _, to, dphi in GRAZING_PAIRS])
     config = {"type": "cook_torrance", "distribution": distribution, "geometry": "smith",
               "alpha": alpha, "k": 0.0, "f0": f0, "specular_reflectance": 1.0}
-    added = (eval_pairs(mi.load_dict({**config, "energy_compensation": True}), wi, wo)
-             - eval_pairs(mi.load_dict(config), wi, wo))[:, 0] / wo[:, 2]
+    plugins = [mi.load_dict({**config, "energy_compensation": True}), mi.load_dict(config)]
+    comp, single = ([eval_at_viewer(bsdf, ti, wo[k:k + 1], phi_i_deg=0.0)[0, 0]
+                     for k, (_, ti, _, _) in enumerate(GRAZING_PAIRS)] for bsdf in plugins)
+    added = (np.array(comp) - np.array(single)) / wo[:, 2]
     walked, error = brdf(distribution, wi, wo, alpha, f0, paths=paths, seed=5,
                          orders=(2, MAX_ORDER), error=True)
     return [{"pair": name, "theta_i": ti, "theta_o": to, "dphi": dphi, "added": float(a),

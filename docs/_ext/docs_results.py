@@ -83,7 +83,10 @@ def _trade_targets() -> int:
     return len(dict.fromkeys(r["target"] for r in fits()))
 
 
+@lru_cache(maxsize=None)
 def _trade_checks() -> list:
+    """trade.checks of the committed records, once per build (it loads each
+    conductor to read its F0; five roles read it)."""
     from mi_brdfs.tools.fit import trade
     return trade.checks(fits())
 

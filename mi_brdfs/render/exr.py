@@ -33,22 +33,24 @@ def dir_mode() -> int:
     return 0o777 & ~umask()
 
 
+def new_file(directory: str, prefix: str, suffix: str = "") -> str:
+    """Create an empty file of a new name in ``directory`` (mode 0600); its path."""
+    fd, path = tempfile.mkstemp(prefix=prefix, suffix=suffix, dir=directory)
+    os.close(fd)
+    return path
+
+
 @contextlib.contextmanager
 def atomic_path(path: str) -> Iterator[str]:
     """Yield a temporary path beside ``path``; rename it over ``path`` on success,
     delete it on any error (or interruption)."""
     directory = os.path.dirname(os.path.abspath(path))
     suffix = os.path.splitext(path)[1]
-    fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=suffix, dir=directory)
-    os.close(fd)
-    try:
-        with interrupt.temporary(tmp):      # removed too if Ctrl-C ends the process
-            yield tmp
-            os.chmod(tmp, file_mode())      # mkstemp made it 0600
-            os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+    # removed unless moved into place, whatever ends the block (Ctrl-C included)
+    with interrupt.temporary(lambda: new_file(directory, ".tmp-", suffix)) as tmp:
+        yield tmp
+        os.chmod(tmp, file_mode())          # mkstemp made it 0600
+        os.replace(tmp, path)
 
 
 def write_atomically(path: str, write: Callable[[str], None]) -> None:

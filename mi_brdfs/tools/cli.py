@@ -419,8 +419,7 @@ def main(argv: list[str] | None = None) -> int:
         with interrupt.watching(prog):          # Ctrl-C within a second, even in a kernel
             return args.run(args)
     except KeyboardInterrupt:
-        interrupt.finished()
-        print(f"{prog}: interrupted", file=sys.stderr)
+        interrupt.finished(prog)                # "PROG: interrupted", once
         return 130
     except Exception as error:       # one clear line, unless --traceback
         if args is None or args.traceback:

@@ -30,12 +30,11 @@ from __future__ import annotations
 import contextlib
 import json
 import os
-import shutil
 import tempfile
 from typing import Iterable, Iterator
 
 from .. import _interrupt as interrupt
-from ..render.exr import dir_mode, file_mode
+from ..render.exr import dir_mode, file_mode, new_file
 
 MARKER = ".mi-brdfs-report"
 
@@ -49,11 +48,10 @@ def check_writable_dir(directory: str) -> None:
     if not os.path.isdir(directory):
         raise OutputError(f"folder {directory} does not exist")
     try:
-        fd, probe = tempfile.mkstemp(prefix=".tmp-probe-", dir=directory)
+        with interrupt.temporary(lambda: new_file(directory, ".tmp-probe-")):
+            pass                                 # made, then removed
     except OSError as error:
         raise OutputError(f"cannot write in {directory}: {error.strerror}") from None
-    os.close(fd)
-    os.unlink(probe)
 
 
 def check_output_file(path: str, option: str = "-o") -> None:
@@ -149,23 +147,19 @@ def report_dir(path: str, command: str, inputs: Iterable[str] = ()) -> Iterator[
     check_report_dir(path, inputs)
     path = report_target(path)
     parent = os.path.dirname(os.path.abspath(path))
-    tmp = tempfile.mkdtemp(prefix=".tmp-report-", dir=parent)
-    try:
-        with interrupt.temporary(tmp):           # removed too if Ctrl-C ends the process
-            yield tmp
-            files = [n for n in _listing(tmp) if not n.endswith("/")]
-            with open(os.path.join(tmp, MARKER), "w") as f:
-                json.dump({"command": command, "files": files}, f, indent=1)
-            for name in files + [MARKER]:
-                os.chmod(os.path.join(tmp, name), file_mode())
-            for folder, _, _ in os.walk(tmp):
-                os.chmod(folder, dir_mode())     # mkdtemp made it 0700
-            check_report_dir(path, inputs)       # unchanged while we worked
-            with interrupt.critical():           # a previous report is set aside meanwhile
-                _move_into_place(tmp, path)
-    finally:
-        if os.path.isdir(tmp):
-            shutil.rmtree(tmp)                   # our own temporary folder only
+    # our own temporary folder, removed unless moved into place (Ctrl-C included)
+    with interrupt.temporary(lambda: tempfile.mkdtemp(prefix=".tmp-report-", dir=parent)) as tmp:
+        yield tmp
+        files = [n for n in _listing(tmp) if not n.endswith("/")]
+        with open(os.path.join(tmp, MARKER), "w") as f:
+            json.dump({"command": command, "files": files}, f, indent=1)
+        for name in files + [MARKER]:
+            os.chmod(os.path.join(tmp, name), file_mode())
+        for folder, _, _ in os.walk(tmp):
+            os.chmod(folder, dir_mode())         # mkdtemp made it 0700
+        check_report_dir(path, inputs)           # unchanged while we worked
+        with interrupt.critical():               # a previous report is set aside meanwhile
+            _move_into_place(tmp, path)
 
 
 def _move_into_place(tmp: str, path: str) -> None:

@@ -1,8 +1,10 @@
 """Ctrl-C ends a command within about a second, wherever it is: during the
 imports (one line, status 130, no traceback), and during a render pass that
-runs for minutes (the previous output kept, no temporary file left). Each
-command runs in its own process with SIGINT's default disposition (a test run
-in the background would otherwise hand it on ignored)."""
+runs for minutes (the previous output kept, no temporary file left); and in
+each order in which the main thread and the watcher can end it, no temporary
+path is left and the line is printed once. Each command runs in its own
+process with SIGINT's default disposition (a test run in the background would
+otherwise hand it on ignored)."""
 import os
 import pty
 import signal
@@ -24,7 +26,7 @@ import mi_brdfs
 from mi_brdfs import _interrupt as interrupt
 scene = mi.load_file(mi_brdfs.scenes.path("course"), mode="hdr", res=128)
 dr.set_log_level(dr.LogLevel.Info)            # says when the kernel starts to run
-with interrupt.watching("kernel") as watched, interrupt.temporary(sys.argv[1]):
+with interrupt.watching("kernel") as watched, interrupt.temporary(lambda: sys.argv[1]):
     assert watched
     np.array(mi.render(scene, spp=1 << 17))   # (as the passes read it: waits for the kernel)
 """
@@ -134,3 +136,77 @@ def test_during_a_render_pass(tmp_path):
     assert seconds < 5, seconds
     assert out.read_bytes() == b"the previous good render"
     assert [p.name for p in tmp_path.iterdir()] == ["course.exr"]
+
+
+# --- every order in which the two can end it, forced -----------------------------
+# mi_brdfs/_interrupt.py alone (no Mitsuba), with a short grace.
+# The main thread is put in position, says "ready", and the test sends SIGINT.
+ORDERS = r"""
+import importlib.util, os, signal, sys, time
+spec = importlib.util.spec_from_file_location("interrupt", sys.argv[1])
+interrupt = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(interrupt)
+folder, order = sys.argv[2], sys.argv[3]
+GRACE = 0.2
+
+def partial():                        # a temporary file the command makes
+    path = os.path.join(folder, ".tmp-partial")
+    open(path, "w").close()
+    return path
+
+def ready():
+    print("ready", flush=True)
+
+def python_runs():                    # the KeyboardInterrupt is raised here
+    ready()
+    while True:
+        time.sleep(0.01)
+
+def in_a_kernel():                    # no Python runs (SIGINT reaches another thread)
+    signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    ready()
+    time.sleep(60)
+
+def in_a_critical_block():            # the Ctrl-C comes while a report is moved into place
+    with interrupt.critical():
+        ready()
+        time.sleep(0.5)
+        open(os.path.join(folder, "moved"), "w").close()
+    time.sleep(60)
+
+# seconds the rest of the unwinding takes, after the temporary's own block
+REST = {"slow unwinding": 3 * GRACE}
+try:
+    with interrupt.watching("prog", grace=GRACE):
+        try:
+            with interrupt.temporary(partial):
+                {"watcher first": in_a_kernel, "critical": in_a_critical_block}.get(
+                    order, python_runs)()
+        finally:
+            time.sleep(REST.get(order, 0.0))
+except KeyboardInterrupt:
+    interrupt.finished("prog")        # as the command line does: prints nothing again
+    sys.exit(130)
+"""
+
+
+@pytest.mark.parametrize("order", ["watcher first", "main thread first", "slow unwinding",
+                                   "critical"])
+def test_every_order_leaves_nothing_and_says_it_once(tmp_path, order):
+    """watcher first: the main thread waits in C (as for a kernel); main thread
+    first: it unwinds by itself, within the grace or slower (the watcher then
+    ends the process halfway through the unwinding, after the temporary's block
+    removed its file: what failed under load); critical: the Ctrl-C comes
+    inside a block that must not be cut, which ends before either acts."""
+    import mi_brdfs
+    module = os.path.join(os.path.dirname(mi_brdfs.__file__), "_interrupt.py")
+    folder = tmp_path / "out"
+    folder.mkdir()
+    (folder / "mine.exr").write_text("a user's file")
+    process = start(["-c", ORDERS, module, str(folder), order])
+    seconds, err = interrupt_after(process, "ready")
+    assert process.returncode == 130, err
+    assert [line for line in err.splitlines() if line.strip()] == ["prog: interrupted"], err
+    assert sorted(p.name for p in folder.iterdir()) == \
+        (["mine.exr", "moved"] if order == "critical" else ["mine.exr"])
+    assert seconds < 3, seconds

@@ -21,6 +21,8 @@ import subprocess
 import sys
 import tempfile
 
+from ...render.exr import atomic_path
+
 FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
          "--disable-component-update", "--disable-sync", "--no-first-run",
          # WebGL in software (SwiftShader), which recent Chromium enables only when
@@ -121,18 +123,8 @@ def column(page, side: str):
 
 def screenshot(target, path: str) -> None:
     """A screenshot of a page or a locator, written atomically."""
-    folder = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(suffix=".png", dir=folder)
-    os.close(fd)
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(tmp, 0o666 & ~umask)                 # as a file written plainly
-    try:
+    with atomic_path(path) as tmp:
         target.screenshot(path=tmp)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
 
 
 def screenshots(out_dir: str) -> list[str]:

@@ -8,8 +8,10 @@ swallow the exception), nothing may happen for minutes. So while a command
 runs (:func:`watching`) two things act on Ctrl-C:
 
 - **the main thread**, as usual: it raises KeyboardInterrupt as soon as it
-  runs Python, unwinds, each block cleaning up after itself, and
-  :func:`finished` prints "PROG: interrupted" and stands the watcher down;
+  runs Python and unwinds, each block cleaning up after itself, and
+  :func:`end` prints "PROG: interrupted" and ends the process with status
+  130 at once (a normal exit would wait for Dr.Jit's kernels still in flight,
+  minutes of a render pass);
 - **the watcher**, a thread woken at once through Python's wake-up fd (written
   by the C-level handler from whichever thread the signal reaches). If the
   command has not ended within :data:`GRACE` seconds of the signal, the
@@ -39,13 +41,13 @@ import shutil
 import signal
 import sys
 import threading
+import time
 from typing import Callable, Iterator
 
 GRACE = 0.5        # seconds after Ctrl-C before the watcher ends the command
 
 _temporary: set[str] = set()     # the temporary paths the watcher would remove
 _lock = threading.RLock()        # held to make, remove or move them; the watcher keeps it
-_finished = threading.Event()    # the command ended by itself after a Ctrl-C
 _deferred = False                # a Ctrl-C that came while the main thread held the lock
 _announced = False               # "PROG: interrupted" is written
 
@@ -107,16 +109,18 @@ def _announce(prog: str, start: str = "") -> None:
             sys.stderr.flush()
 
 
-def finished(prog: str) -> None:
-    """The command ends by itself after a Ctrl-C: remove what a clean-up that
-    the interrupt cut short left registered, print "PROG: interrupted" unless
-    the watcher has, and stand the watcher down. Calling it again does nothing."""
+def end(prog: str) -> None:
+    """The command has unwound after a Ctrl-C: remove what a clean-up that the
+    interrupt cut short left registered, print "PROG: interrupted" unless the
+    watcher has, and end the process with status 130 (the output flushed)."""
     with _owned():
         for path in list(_temporary):
             _remove(path)
         _temporary.clear()
         _announce(prog)
-        _finished.set()
+        with contextlib.suppress(OSError, ValueError):
+            sys.stdout.flush()
+        os._exit(130)
 
 
 def _hard_exit(prog: str) -> None:
@@ -140,8 +144,8 @@ def _on_interrupt(signum, frame) -> None:
 def watching(prog: str, grace: float = GRACE) -> Iterator[bool]:
     """Run the block with Ctrl-C watched as the module says; yields False (and
     watches nothing) outside the main thread, where SIGINT is ignored, or where
-    someone else's wake-up fd is set. An interrupted block ends in
-    :func:`finished` before the KeyboardInterrupt goes on."""
+    someone else's wake-up fd is set. An interrupted block ends the process
+    (:func:`end`) when its KeyboardInterrupt reaches this block."""
     global _deferred, _announced
     if (threading.current_thread() is not threading.main_thread()
             or signal.getsignal(signal.SIGINT) is signal.SIG_IGN):
@@ -156,7 +160,6 @@ def watching(prog: str, grace: float = GRACE) -> Iterator[bool]:
         os.close(write)
         yield False
         return
-    _finished.clear()
     _deferred = _announced = False
 
     def wait() -> None:
@@ -167,7 +170,8 @@ def watching(prog: str, grace: float = GRACE) -> Iterator[bool]:
                 return
             if not byte:                               # the block ended: pipe closed
                 return
-            if byte[0] == signal.SIGINT and not _finished.wait(grace):
+            if byte[0] == signal.SIGINT:
+                time.sleep(grace)                      # the main thread may end it first
                 _hard_exit(prog)
 
     previous_handler = signal.signal(signal.SIGINT, _on_interrupt)
@@ -176,8 +180,7 @@ def watching(prog: str, grace: float = GRACE) -> Iterator[bool]:
     try:
         yield True
     except KeyboardInterrupt:
-        finished(prog)
-        raise
+        end(prog)
     finally:
         signal.signal(signal.SIGINT, previous_handler)
         signal.set_wakeup_fd(-1)

@@ -418,9 +418,8 @@ def main(argv: list[str] | None = None) -> int:
         prog = args.prog
         with interrupt.watching(prog):          # Ctrl-C within a second, even in a kernel
             return args.run(args)
-    except KeyboardInterrupt:
-        interrupt.finished(prog)                # "PROG: interrupted", once
-        return 130
+    except KeyboardInterrupt:                   # (before the watching began: at parsing)
+        interrupt.end(prog)                     # "PROG: interrupted", once; status 130
     except Exception as error:       # one clear line, unless --traceback
         if args is None or args.traceback:
             raise

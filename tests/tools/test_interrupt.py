@@ -185,8 +185,7 @@ try:
         finally:
             time.sleep(REST.get(order, 0.0))
 except KeyboardInterrupt:
-    interrupt.finished("prog")        # as the command line does: prints nothing again
-    sys.exit(130)
+    sys.exit(3)                       # not reached: the watched block ends the process
 """
 
 

@@ -1,7 +1,9 @@
 """Looking at a BSDF: its values in the plane of incidence, over the hemisphere,
 and its directional albedo; the small scenes that show one (a sphere, a
-textured plane) and fitting a texture to renders by gradient descent. Used by
-the validation report, the benchmarks, the notebooks and the tests."""
+textured plane); its methods called on many direction pairs and the Dr.Jit
+variables a traced call creates (the bench times them, the fit counts them);
+and fitting a texture to renders by gradient descent. Used by the validation
+report, the benchmarks, the fit, the notebooks and the tests."""
 from __future__ import annotations
 
 import math
@@ -127,6 +129,63 @@ def render_sphere(bsdf: dict, res: int = 128, spp: int = 16, **scene_options) ->
     import mitsuba as mi
     scene = mi.load_dict(sphere_scene(bsdf, res, **scene_options))
     return np.array(mi.render(scene, spp=spp))[..., :3]
+
+
+# ----------------------------------------------------------------------------
+#  BSDF calls on many direction pairs: timed by the bench, counted by the fit
+# ----------------------------------------------------------------------------
+
+BSDF_METHODS = ("eval", "pdf", "eval_pdf", "sample")
+
+
+def bsdf_inputs(lanes: int, seed: int = 1) -> dict:
+    """Random viewer and light directions above the surface and random samples,
+    evaluated (a kernel then holds the BSDF alone)."""
+    import drjit as dr
+    import mitsuba as mi
+    rng = np.random.default_rng(seed)
+
+    def hemisphere():
+        v = rng.normal(size=(3, lanes))
+        v /= np.linalg.norm(v, axis=0)
+        v[2] = np.abs(v[2])
+        return from_numpy(mi.Vector3f, v)
+    si = dr.zeros(mi.SurfaceInteraction3f, lanes)
+    si.wi = hemisphere()
+    si.uv = from_numpy(mi.Point2f, rng.random((2, lanes), dtype=np.float32))
+    x = {"ctx": mi.BSDFContext(), "si": si, "wo": hemisphere(),
+         "sample1": from_numpy(mi.Float, rng.random(lanes, dtype=np.float32)),
+         "sample2": from_numpy(mi.Point2f, rng.random((2, lanes), dtype=np.float32))}
+    dr.eval(x["si"].wi, x["si"].uv, x["wo"], x["sample1"], x["sample2"])
+    return x
+
+
+def bsdf_call(bsdf, method: str, x: dict):
+    """``bsdf.method`` (one of :data:`BSDF_METHODS`) on the inputs of :func:`bsdf_inputs`."""
+    if method == "sample":
+        return bsdf.sample(x["ctx"], x["si"], x["sample1"], x["sample2"])
+    return getattr(bsdf, method)(x["ctx"], x["si"], x["wo"])
+
+
+def variables_created(run) -> int:
+    """The Dr.Jit variables ``run()`` creates while it is traced: the
+    variable creations in Dr.Jit's trace log, less those that value numbering
+    answered with an existing variable ("lvn hit"). Mitsuba's C++ built-ins
+    are counted the same way."""
+    import contextlib
+    import io
+
+    import drjit as dr
+    log, level = io.StringIO(), dr.log_level()
+    with contextlib.redirect_stdout(log):            # (Dr.Jit logs through Python's stdout)
+        dr.set_log_level(dr.LogLevel.Trace)
+        try:
+            out = run()
+        finally:
+            dr.set_log_level(level)
+    del out
+    return sum(1 for line in log.getvalue().splitlines()
+               if line.startswith("jit_var_new") and "[lvn hit]" not in line)
 
 
 # ----------------------------------------------------------------------------

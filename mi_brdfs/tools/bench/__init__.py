@@ -32,13 +32,11 @@ import os
 import time
 
 from .groups import GROUPS, Group
-from .measure import (BSDF_METHODS, FULL, QUICK, References, Settings, efficiency, scene_dict,
-                      spheres_scene)
+from .measure import FULL, QUICK, References, Settings, efficiency, scene_dict, spheres_scene
 from .workers import in_subprocess
 
 __all__ = ["run", "require", "GROUPS", "Group", "Settings", "QUICK", "FULL", "References",
-           "efficiency", "scene_dict", "spheres_scene", "in_subprocess",
-           "BSDF_METHODS"]
+           "efficiency", "scene_dict", "spheres_scene", "in_subprocess"]
 
 DEFAULT_CACHE = os.path.join(os.path.expanduser("~"), ".cache", "mi_brdfs", "references")
 

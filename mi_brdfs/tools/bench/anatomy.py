@@ -3,8 +3,8 @@ function calls, texture evaluations, MicrofacetDistribution objects built,
 BSDF methods it calls again, helpers called more than once; and how often a
 path-traced render calls each method. Measured with cProfile, with the
 plugin's textures and ``mi.MicrofacetDistribution`` replaced by counting
-wrappers for the duration of one call. And the Dr.Jit variables one call
-creates, of any BSDF, from Dr.Jit's trace log (:func:`variables_created`).
+wrappers for the duration of one call. (The Dr.Jit variables one call
+creates, of any BSDF: :func:`mi_brdfs.tools.analysis.variables_created`.)
 
 Plugin code is told by where its file lies, inside this installed package
 and outside its tools, never by a name in the path: a virtual environment
@@ -16,8 +16,9 @@ from __future__ import annotations
 import functools
 import os
 
+from ..analysis import BSDF_METHODS, bsdf_call
 from ..measures import render_waited
-from .measure import BSDF_METHODS, bsdf_call, scene_dict
+from .measure import scene_dict
 
 PACKAGE = os.path.dirname(os.path.dirname(os.path.dirname(os.path.realpath(__file__))))
 TOOLS = os.path.join(PACKAGE, "tools")
@@ -100,27 +101,6 @@ def call_anatomy(bsdf, method: str, x: dict) -> dict:
             "inner_calls": ", ".join(f"{m} x{n}" for m, n in sorted(inner.items()) if n),
             "repeated": ", ".join(f"{k[2]} x{n}" for k, n in sorted(ours.items(), key=lambda kv: -kv[1])
                                   if n > 1 and not bsdf_method(k))}
-
-
-def variables_created(run) -> int:
-    """The Dr.Jit variables ``run()`` creates while it is traced: the
-    variable creations in Dr.Jit's trace log, less those that value numbering
-    answered with an existing variable ("lvn hit"). Mitsuba's C++ built-ins
-    are counted the same way."""
-    import contextlib
-    import io
-
-    import drjit as dr
-    log, level = io.StringIO(), dr.log_level()
-    with contextlib.redirect_stdout(log):            # (Dr.Jit logs through Python's stdout)
-        dr.set_log_level(dr.LogLevel.Trace)
-        try:
-            out = run()
-        finally:
-            dr.set_log_level(level)
-    del out
-    return sum(1 for line in log.getvalue().splitlines()
-               if line.startswith("jit_var_new") and "[lvn hit]" not in line)
 
 
 def calls_in_a_render(config: dict) -> dict[str, list[int]]:

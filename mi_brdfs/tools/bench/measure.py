@@ -1,6 +1,7 @@
 """How the bench measures: its settings, its scenes, timed renders and their
 split from Dr.Jit's kernel history, errors against cached references, BSDF
-calls on direction pairs, peak memory and the machine.
+peak memory and the machine (the BSDF calls on direction pairs it times are
+:mod:`mi_brdfs.tools.analysis`'s).
 
 Every timing is the median of ``repeats`` renders after a warm-up render that
 compiles the kernels (the warm-up's extra time is reported as compile time).
@@ -21,7 +22,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..._jit import from_numpy
 from ...bsdfs import cases
 from .. import settings
 from ..analysis import camera
@@ -217,41 +217,6 @@ class References:
         os.makedirs(self.directory, exist_ok=True)
         exr.write_exr(path, reference)
         return np.asarray(reference, dtype=np.float64)
-
-
-# ----------------------------------------------------------------------------
-#  BSDF calls on direction pairs (kernels, tracing)
-# ----------------------------------------------------------------------------
-
-BSDF_METHODS = ("eval", "pdf", "eval_pdf", "sample")
-
-
-def bsdf_inputs(lanes: int, seed: int = 1) -> dict:
-    """Random viewer and light directions above the surface and random samples,
-    evaluated (a kernel then holds the BSDF alone)."""
-    import drjit as dr
-    import mitsuba as mi
-    rng = np.random.default_rng(seed)
-
-    def hemisphere():
-        v = rng.normal(size=(3, lanes))
-        v /= np.linalg.norm(v, axis=0)
-        v[2] = np.abs(v[2])
-        return from_numpy(mi.Vector3f, v)
-    si = dr.zeros(mi.SurfaceInteraction3f, lanes)
-    si.wi = hemisphere()
-    si.uv = from_numpy(mi.Point2f, rng.random((2, lanes), dtype=np.float32))
-    x = {"ctx": mi.BSDFContext(), "si": si, "wo": hemisphere(),
-         "sample1": from_numpy(mi.Float, rng.random(lanes, dtype=np.float32)),
-         "sample2": from_numpy(mi.Point2f, rng.random((2, lanes), dtype=np.float32))}
-    dr.eval(x["si"].wi, x["si"].uv, x["wo"], x["sample1"], x["sample2"])
-    return x
-
-
-def bsdf_call(bsdf, method: str, x: dict):
-    if method == "sample":
-        return bsdf.sample(x["ctx"], x["si"], x["sample1"], x["sample2"])
-    return getattr(bsdf, method)(x["ctx"], x["si"], x["wo"])
 
 
 # ----------------------------------------------------------------------------

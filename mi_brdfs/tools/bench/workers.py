@@ -14,9 +14,10 @@ import statistics
 import time
 
 from ...bsdfs import cases
-from .anatomy import call_anatomy, calls_in_a_render, variables_created
+from ..analysis import BSDF_METHODS, bsdf_call, bsdf_inputs, variables_created
 from ..measures import render_waited
-from .measure import BSDF_METHODS, bsdf_call, bsdf_inputs, measured, peak_mib, spheres_scene
+from .anatomy import call_anatomy, calls_in_a_render
+from .measure import measured, peak_mib, spheres_scene
 
 RESULT = "mi-brdfs-bench-result "       # the mark of the result line
 

@@ -22,7 +22,7 @@ on this machine. It writes nothing.
 
 **Counted** (``ops_ratio``): the Dr.Jit variables one traced ``eval`` and
 one traced ``sample`` create (the bench's count, from Dr.Jit's trace log:
-:func:`..bench.anatomy.variables_created`), relative to the target's: the
+:func:`mi_brdfs.tools.analysis.variables_created`), relative to the target's: the
 same on every run.
 """
 from __future__ import annotations
@@ -54,8 +54,7 @@ def _make(spec):
 
 def operations(bsdf) -> int:
     """Dr.Jit variables one traced eval and one traced sample of ``bsdf`` create."""
-    from ..bench.anatomy import variables_created
-    from ..bench.measure import bsdf_call, bsdf_inputs
+    from ..analysis import bsdf_call, bsdf_inputs, variables_created
     x = bsdf_inputs(OPS_LANES)
     for method in ("eval", "sample"):
         bsdf_call(bsdf, method, x)             # the first call may build what later calls reuse

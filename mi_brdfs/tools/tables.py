@@ -37,7 +37,7 @@ import drjit as dr
 import mitsuba as mi
 
 from .._jit import from_numpy
-from ..bsdfs import compensation
+from ..bsdfs import PLUGINS, compensation
 from ..bsdfs.grid import hemisphere_direction
 from . import groundtruth
 from .groundtruth import MU_MIN, WALK_SEED
@@ -108,7 +108,6 @@ def build(spec: compensation.AlbedoSpec, samples: int | None = None, batch: int 
 def specs() -> list:
     """Every table every model declares (its ``tables()``), AlbedoSpecs and
     WalkSpecs, each once."""
-    from ..bsdfs import PLUGINS
     found = []
     for cls in PLUGINS:
         for spec in cls.tables():

@@ -13,8 +13,12 @@ path that holds that name too (the counts of calls by Mitsuba then read 0).
 """
 from __future__ import annotations
 
+import cProfile
 import functools
 import os
+import pstats
+
+import mitsuba as mi
 
 from ..analysis import BSDF_METHODS, bsdf_call
 from ..measures import render_waited
@@ -64,8 +68,6 @@ class _CountingTexture:
 
 def profile(run) -> dict:
     """cProfile's statistics of ``run()``: {(file, line, name): (cc, nc, tt, ct, callers)}."""
-    import cProfile
-    import pstats
     profiler = cProfile.Profile()
     profiler.enable()
     run()
@@ -77,7 +79,6 @@ def call_anatomy(bsdf, method: str, x: dict) -> dict:
     """What one traced call of a plugin method does: Python function calls,
     texture evaluations, MicrofacetDistribution objects built, the BSDF
     methods it calls again, and the helpers called more than once."""
-    import mitsuba as mi
     textures = {k: v for k, v in vars(bsdf).items() if isinstance(v, mi.Texture)}
     evals, built = [0], [0]
     original = mi.MicrofacetDistribution
@@ -106,7 +107,6 @@ def call_anatomy(bsdf, method: str, x: dict) -> dict:
 def calls_in_a_render(config: dict) -> dict[str, list[int]]:
     """Per BSDF method: [calls from outside the plugins (Mitsuba's), all calls]
     of one plugin instance while one path-traced render (depth 3) is traced."""
-    import mitsuba as mi
     scene = mi.load_dict(scene_dict(config, 8, plane=False), parallel=False)
     stats = profile(lambda: render_waited(scene, 1, seed=0))
     counts = {m: [0, 0] for m in BSDF_METHODS}

@@ -16,13 +16,18 @@ import json
 import math
 import os
 import platform
+import resource
 import statistics
 import time
 from dataclasses import dataclass
 
 import numpy as np
 
+import drjit as dr
+import mitsuba as mi
+
 from ...bsdfs import cases
+from ...render import exr
 from .. import settings
 from ..analysis import camera
 from ..measures import render_waited
@@ -88,7 +93,6 @@ FLOOR = {"type": "lambert", "reflectance": 0.5}
 def scene_dict(bsdf: dict, res: int, integrator: dict | None = None, lights: int = 1,
                env: float = 0.3, plane: bool = True) -> dict:
     """A sphere on a plane, point lights and a dim constant environment."""
-    import mitsuba as mi
     T = mi.ScalarTransform4f
     d = {
         "type": "scene",
@@ -176,7 +180,6 @@ def measured(run) -> dict:
     """Wall time of ``run()`` (which must evaluate its result) and its split from
     Dr.Jit's kernel history (s): code generation (codegen and LLVM), kernel
     execution, and tracing (the rest: Python and Dr.Jit building the kernels)."""
-    import drjit as dr
     dr.set_flag(dr.JitFlag.KernelHistory, True)
     dr.kernel_history()                              # clear
     start = time.perf_counter()
@@ -199,14 +202,10 @@ class References:
         self.directory, self.spp = directory, spp
 
     def key(self, d: dict) -> str:
-        import mitsuba as mi
         text = json.dumps(d, sort_keys=True, default=str) + f"|{self.spp}|{mi.__version__}"
         return hashlib.sha1(text.encode()).hexdigest()[:16]
 
     def get(self, d: dict) -> np.ndarray:
-        import mitsuba as mi
-
-        from ...render import exr
         path = os.path.join(self.directory, f"ref-{self.key(d)}.exr")
         if os.path.exists(path):
             return exr.read_exr(path).astype(np.float64)
@@ -235,13 +234,10 @@ def peak_mib() -> float:
                     return int(line.split()[1]) / 1024
     except OSError:
         pass
-    import resource
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
 def machine() -> dict:
-    import drjit as dr
-    import mitsuba as mi
     cpu = platform.processor()
     try:
         with open("/proc/cpuinfo") as f:

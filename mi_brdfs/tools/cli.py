@@ -38,6 +38,7 @@ from typing import NoReturn
 from .. import _interrupt as interrupt, scenes
 from ..render import tonemap
 from . import render
+from .explore import add_parser as add_explore
 from .arguments import integer, real, set_threads, set_verbosity
 from .errors import one_line
 
@@ -72,7 +73,7 @@ def cmd_scenes(args: argparse.Namespace) -> int:
 # ----------------------------------------------------------------------------
 
 def cmd_compare(args: argparse.Namespace) -> int:
-    from . import compare
+    from . import compare           # here: start-up of every other command (measured)
 
     thresholds = {k: getattr(args, k) for k in compare.THRESHOLDS}
     results = compare.compare(args.reference, args.tests, args.output, thresholds,
@@ -89,7 +90,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
-    from . import validate
+    from . import validate          # here: it needs the reports extra (SciPy)
 
     set_threads(args.threads)
     set_verbosity(args.verbose)
@@ -106,7 +107,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
-    from . import bench
+    from . import bench             # here: it needs the reports extra (SciPy)
 
     set_threads(args.threads)
     set_verbosity(args.verbose)
@@ -120,7 +121,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
 
 def cmd_fit(args: argparse.Namespace) -> int:
-    from . import fit
+    from . import fit               # here: start-up of every other command (measured)
     from .fit import sweep
 
     set_verbosity(args.verbose)
@@ -255,7 +256,6 @@ def parser() -> Parser:
                    help="run on this Dask distributed scheduler (e.g. tcp://host:8786) "
                         "instead of local processes")
     f.set_defaults(run=cmd_fit)
-    from .explore import add_parser as add_explore      # mi-brdfs explore (tools/explore)
     add_explore(sub, common)
     for name, command in sub.choices.items():
         command.set_defaults(prog=command.prog)

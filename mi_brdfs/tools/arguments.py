@@ -1,7 +1,7 @@
 """What the commands' shared arguments mean: checked numbers (argparse types
 whose bad value is one line, exit 1) and Mitsuba's settings (variant,
-threads, log level). Used by the CLI and by the tools that parse arguments
-of their own (the explorer's backend)."""
+threads, log level). Used by the CLI, by the render command and by the tools
+that parse arguments of their own (the explorer's backend)."""
 from __future__ import annotations
 
 import argparse

@@ -59,7 +59,7 @@ def materials(twin: str, side: str, n: int, res: int, spp: int, repeats: int) ->
     renders, each split into tracing, code generation and kernel execution (s),
     and the median of ``repeats`` replays of a frozen render."""
     start = time.perf_counter()
-    # parallel=False as in the CLI (see its comment)
+    # parallel=False as in the render command (see its comment in tools/render.py)
     scene = mi.load_dict(spheres_scene(twin, side, n, res), parallel=False)
     result = {"load_s": time.perf_counter() - start}
     first = measured(lambda: render_waited(scene, spp, seed=0))

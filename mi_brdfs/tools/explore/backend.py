@@ -17,8 +17,9 @@ takes:
 - the integrators of the two modes and the tone mapping of
   :mod:`mi_brdfs.render.tonemap`;
 - the fit of :mod:`mi_brdfs.tools.fit` (one model to one target);
-- the command line's conventions (:mod:`mi_brdfs.tools.cli`: checked numbers,
-  threads and log level, errors on one line).
+- the command line's conventions: checked numbers, threads and log level
+  (:mod:`mi_brdfs.tools.arguments`), errors on one line
+  (:mod:`mi_brdfs.tools.errors`).
 """
 from __future__ import annotations
 

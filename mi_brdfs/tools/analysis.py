@@ -85,7 +85,7 @@ def polar_lobes(ax, bsdf, angles=(0, 30, 60, 80), title: str = "") -> None:
     ax.set_thetamax(90)
     ax.set_thetagrids(range(-90, 91, 30), [f"{t}°" for t in range(-90, 91, 30)], fontsize=8)
     # A half disc has room for a few radial labels only: at most 3, none at 0
-    # (many labels ran into each other, "0.00.050.10...").
+    # (more run into each other: "0.00.050.10...").
     ax.yaxis.set_major_locator(MaxNLocator(nbins=3, prune="lower"))
     ax.tick_params(axis="y", labelsize=7)
     ax.set_rlabel_position(-22.5)

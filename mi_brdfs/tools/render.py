@@ -163,8 +163,8 @@ def render(scene: str, outputs: list[str] | None = None, defines: Sequence[str] 
     set_threads(threads)
     set_verbosity(verbose)
 
-    # parallel=False: serial loading is cheap, and parallel loading failed now and
-    # then while the plugins' constructors called the loader (see _binding.create).
+    # parallel=False: serial loading is cheap, and parallel loading can fail while
+    # a plugin's constructor calls the loader (see _binding.create).
     loaded = mi.load_file(scene_path, parallel=False, **defines)
     spp = check_render_numbers(loaded, spp, passes, seed, defines)
 

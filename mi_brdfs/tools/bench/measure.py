@@ -224,9 +224,9 @@ class References:
 
 def peak_mib() -> float:
     """This process's peak resident memory in MiB: Linux's VmHWM, the high-water
-    mark of this program's own memory (ru_maxrss would also count the parent's
-    resident memory at fork time: a worker of a large bench process reported
-    the parent's 397 MiB for every kind), else ru_maxrss."""
+    mark of this program's own memory, else ru_maxrss (which also counts the
+    parent's resident memory at fork time: every worker of a large bench
+    process would read as large as its parent)."""
     try:
         with open("/proc/self/status") as f:
             for line in f:

@@ -100,10 +100,10 @@ def kernels(lanes: int, repeats: int) -> dict:
     """Kernel execution time of each BSDF call, plugin and built-in alternating,
     medians over ``repeats`` rounds after a compiling one.
 
-    On one thread: with Dr.Jit's thread pool on cores shared with other
-    processes, a kernel of a few ms took 1.9 or 5.8 ms depending on whether a
-    worker thread was descheduled (whichever kind ran first in a round, per
-    process); single-threaded, both took 1.8-1.9 ms in every round."""
+    On one thread: on cores shared with other processes, Dr.Jit's thread pool
+    makes a kernel of a few ms take 1.9 or 5.8 ms as one of its threads is
+    descheduled or not (whichever kind runs first in a round, per process);
+    on one thread both take 1.8-1.9 ms in every round."""
     dr.set_thread_count(1)
     x = bsdf_inputs(lanes)
     pairs = [(t.label, mi.load_dict(t.ours), mi.load_dict(t.builtin)) for t in cases.twins()]

@@ -247,9 +247,9 @@ def bounded_least_squares(a: np.ndarray, b: np.ndarray, w: np.ndarray, bounds) -
 
 
 def gram(j: np.ndarray) -> np.ndarray:
-    """jᵀj by einsum: OpenBLAS's threads for a tall product spin on cores
-    shared with Dr.Jit's and other processes' (a fit took 13 s instead of 2 s
-    on this 2-core machine under load)."""
+    """jᵀj by einsum, on one core: OpenBLAS's threads for a tall product spin
+    on cores shared with Dr.Jit's and other processes' (on a loaded 2-core
+    machine a fit then takes 13 s instead of 2 s)."""
     return np.einsum("mi,mj->ij", j, j)
 
 

@@ -12,6 +12,8 @@ Layout: :mod:`mi_brdfs.bsdfs` (the plugins and their shared formulas),
 reachable as ``mi_brdfs.compare``, ``.validate``, ``.bench`` and ``.analysis``
 (imported on first use).
 """
+import importlib
+
 from . import _llvm
 
 _llvm.configure()            # must precede the first `import drjit`
@@ -46,7 +48,6 @@ def __getattr__(name: str):
     """``mi_brdfs.compare`` and the other tools, imported on first use (their
     dependencies are not needed to use the plugins)."""
     if name in TOOLS:
-        import importlib
         return importlib.import_module(f".tools.{name}", __name__)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 

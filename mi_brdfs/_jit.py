@@ -23,6 +23,8 @@ from __future__ import annotations
 
 import numpy as np
 
+import drjit as dr
+
 PAD = 64            # elements: beyond any LLVM vector width (16 with AVX-512)
 ALIGN = 64          # bytes
 DTYPES = {"Float32": np.float32, "Float64": np.float64, "UInt32": np.uint32,
@@ -37,8 +39,6 @@ def from_numpy(cls, values):
     (``mi.Vector3f``, ``mi.Point2f``, ``mi.Color3f``: ``values`` holds one such
     array per component, e.g. ``wo.T`` for an (n, 3) array ``wo``). Non-JIT
     types (scalar variants) are built directly."""
-    import drjit as dr          # here: the tools import this module before Dr.Jit is set up
-
     if not dr.is_jit_v(cls):
         return cls(*values) if dr.depth_v(cls) == 2 else cls(values)
     if dr.depth_v(cls) == 2:

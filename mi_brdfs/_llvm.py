@@ -71,7 +71,7 @@ def loaded_library() -> str:
 
 def check() -> None:
     """Raise LLVMError if drjit's LLVM backend is one known to abort or to be refused."""
-    import drjit as dr
+    import drjit as dr          # here: configure() must run before drjit is first imported
 
     if not dr.has_backend(dr.JitBackend.LLVM):
         raise LLVMError(

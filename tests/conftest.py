@@ -6,7 +6,6 @@ import pytest
 
 import mi_brdfs  # noqa: F401  (LLVM set-up, variant, plugin registration)
 from support import BrokenCases
-from support import eval_and_pdf, random_hemisphere, surface, vec  # noqa: F401  (for older modules)
 
 # A command a test runs in a subprocess (mi-brdfs validate, render, ...) that
 # dies by a signal prints its Python traceback on its stderr, which the test's

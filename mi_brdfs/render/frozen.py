@@ -77,8 +77,8 @@ def warm_up(scene) -> None:
     tracing any BSDF: one sample per pixel of the ``depth`` integrator (the
     sensor's state) and one direction sampled from every emitter (the emitters'
     state, which the ``scanline`` integrator's first render sets). Without it a
-    function frozen on a fresh scene records twice (found by experiment with
-    Mitsuba 3.9; every shipped scene then records once, in both modes)."""
+    function frozen on a fresh scene records twice (Mitsuba 3.9; with it every
+    shipped scene records once, in both modes)."""
     image = mi.render(scene, integrator=mi.load_dict({"type": "depth"}), spp=1)
     si = dr.zeros(mi.SurfaceInteraction3f)
     for emitter in scene.emitters():

@@ -24,6 +24,8 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
+import mitsuba as mi
+
 from . import tonemap
 from .exr import write_atomically, write_channels
 
@@ -84,8 +86,6 @@ def write(path: str, image: np.ndarray, names: Sequence[str],
           metadata: Mapping[str, object] | None = None,
           operator: str = "clamp", exposure: float = 0.0) -> None:
     """Write an (H, W, C) render with channel ``names`` to ``path`` by its extension."""
-    import mitsuba as mi
-
     image = np.asarray(image, dtype=np.float32)
     if check_extension(path) == "OpenEXR":
         # OpenEXR's own writer: mi.Bitmap's EXR writer deadlocks with one

@@ -17,6 +17,10 @@ from __future__ import annotations
 
 import time
 
+import numpy as np
+
+import mitsuba as mi
+
 from . import frozen
 
 
@@ -36,9 +40,6 @@ def render_passes(scene, spp: int, passes: int = 8, seed: int = 0, show=None,
     and after each pass;
     ``log(message)`` receives informational messages (whether and why the
     passes were not frozen). ``freeze=False`` traces every pass."""
-    import mitsuba as mi
-    import numpy as np
-
     say = log or (lambda message: None)
     chunks = split_passes(spp, passes)
     render = None                     # the frozen render, while it is used

@@ -20,6 +20,10 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
+import mitsuba as mi
+
+from .exr import write_atomically
+
 
 def _clean(x: ArrayLike) -> np.ndarray:
     """NaN and negative values -> 0; +Inf stays (each operator maps it to 1)."""
@@ -71,10 +75,6 @@ def to_srgb8(rgb: ArrayLike, operator: str = "clamp", exposure: float = 0.0) -> 
 
 def write_png(path: str, rgb: ArrayLike, operator: str = "clamp", exposure: float = 0.0) -> None:
     """Tone-map a linear RGB image and write it as an 8-bit sRGB PNG, atomically."""
-    import mitsuba as mi
-
-    from .exr import write_atomically
-
     data = to_srgb8(rgb, operator, exposure)
     bitmap = mi.Bitmap(data, mi.Bitmap.PixelFormat.RGB)
     write_atomically(path, lambda tmp: bitmap.write(tmp))

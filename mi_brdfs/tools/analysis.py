@@ -1,20 +1,25 @@
 """Looking at a BSDF: its values in the plane of incidence, over the hemisphere,
 and its directional albedo; the small scenes that show one (a sphere, a
-textured plane) and fitting a texture to renders by gradient descent. Used by
-the validation report, the benchmarks, the notebooks and the tests."""
+textured plane); its methods called on many direction pairs and the Dr.Jit
+variables a traced call creates (the bench times them, the fit counts them);
+and fitting a texture to renders by gradient descent. Used by the validation
+report, the benchmarks, the fit, the notebooks and the tests."""
 from __future__ import annotations
 
+import contextlib
+import io
 import math
 
 import numpy as np
+
+import drjit as dr
+import mitsuba as mi
 
 from .._jit import from_numpy
 
 
 def _si(theta_i_deg: float, phi_i_deg: float = 180.0):
     """A surface interaction whose viewer is at theta_i (opaque: one kernel for all angles)."""
-    import drjit as dr
-    import mitsuba as mi
     t, p = math.radians(theta_i_deg), math.radians(phi_i_deg)
     si = dr.zeros(mi.SurfaceInteraction3f)
     si.wi = mi.Vector3f(dr.opaque(mi.Float, math.sin(t) * math.cos(p)),
@@ -26,7 +31,6 @@ def _si(theta_i_deg: float, phi_i_deg: float = 180.0):
 
 def eval_at_viewer(bsdf, theta_i_deg: float, wo: np.ndarray, phi_i_deg: float = 180.0) -> np.ndarray:
     """eval(wi, wo) (f·cos theta_o, per channel) for the viewer at theta_i and an (N, 3) array wo."""
-    import mitsuba as mi
     value = bsdf.eval(mi.BSDFContext(), _si(theta_i_deg, phi_i_deg),
                       from_numpy(mi.Vector3f, wo.T))
     return np.array(value).T
@@ -55,9 +59,6 @@ def directional_albedo(bsdf, angles, strata: tuple[int, int] = (512, 2048), seed
     """E(theta_i) = integral of eval(wi, wo) dwo for each angle (degrees), by
     stratified jittered uniform-hemisphere quadrature: independent of the
     plugin's own sampling. ``channel`` reduces the three channels (max by default)."""
-    import drjit as dr
-    import mitsuba as mi
-
     nu, nv = strata
     rng = np.random.default_rng(seed)
     u = ((np.arange(nu)[:, None] + rng.random((nu, nv))) / nu).ravel()
@@ -77,14 +78,14 @@ def polar_lobes(ax, bsdf, angles=(0, 30, 60, 80), title: str = "") -> None:
     for a in angles:
         theta_o, value = plane_of_incidence(bsdf, a)
         ax.plot(theta_o, value, label=f"θ_i = {a}°")
-    from matplotlib.ticker import MaxNLocator
+    from matplotlib.ticker import MaxNLocator   # optional: the reports extra
 
     ax.set_theta_zero_location("N")
     ax.set_thetamin(-90)
     ax.set_thetamax(90)
     ax.set_thetagrids(range(-90, 91, 30), [f"{t}°" for t in range(-90, 91, 30)], fontsize=8)
     # A half disc has room for a few radial labels only: at most 3, none at 0
-    # (many labels ran into each other, "0.00.050.10...").
+    # (more run into each other: "0.00.050.10...").
     ax.yaxis.set_major_locator(MaxNLocator(nbins=3, prune="lower"))
     ax.tick_params(axis="y", labelsize=7)
     ax.set_rlabel_position(-22.5)
@@ -95,7 +96,6 @@ def polar_lobes(ax, bsdf, angles=(0, 30, 60, 80), title: str = "") -> None:
 def camera(res: int, fov: float, origin=(0.0, 0.0, 4.0), target=(0.0, 0.0, 0.0)) -> dict:
     """A perspective sensor looking from ``origin`` at ``target`` (y up), a
     square ``res`` × ``res`` film with a box filter and an independent sampler."""
-    import mitsuba as mi
     return {"type": "perspective", "fov": fov,
             "to_world": mi.ScalarTransform4f().look_at(origin=list(origin), target=list(target),
                                                        up=[0, 1, 0]),
@@ -124,9 +124,59 @@ def sphere_scene(bsdf: dict, res: int = 128, integrator: dict | None = None,
 
 def render_sphere(bsdf: dict, res: int = 128, spp: int = 16, **scene_options) -> np.ndarray:
     """Render sphere_scene(bsdf) and return the linear RGB image (H, W, 3)."""
-    import mitsuba as mi
     scene = mi.load_dict(sphere_scene(bsdf, res, **scene_options))
     return np.array(mi.render(scene, spp=spp))[..., :3]
+
+
+# ----------------------------------------------------------------------------
+#  BSDF calls on many direction pairs: timed by the bench, counted by the fit
+# ----------------------------------------------------------------------------
+
+BSDF_METHODS = ("eval", "pdf", "eval_pdf", "sample")
+
+
+def bsdf_inputs(lanes: int, seed: int = 1) -> dict:
+    """Random viewer and light directions above the surface and random samples,
+    evaluated (a kernel then holds the BSDF alone)."""
+    rng = np.random.default_rng(seed)
+
+    def hemisphere():
+        v = rng.normal(size=(3, lanes))
+        v /= np.linalg.norm(v, axis=0)
+        v[2] = np.abs(v[2])
+        return from_numpy(mi.Vector3f, v)
+    si = dr.zeros(mi.SurfaceInteraction3f, lanes)
+    si.wi = hemisphere()
+    si.uv = from_numpy(mi.Point2f, rng.random((2, lanes), dtype=np.float32))
+    x = {"ctx": mi.BSDFContext(), "si": si, "wo": hemisphere(),
+         "sample1": from_numpy(mi.Float, rng.random(lanes, dtype=np.float32)),
+         "sample2": from_numpy(mi.Point2f, rng.random((2, lanes), dtype=np.float32))}
+    dr.eval(x["si"].wi, x["si"].uv, x["wo"], x["sample1"], x["sample2"])
+    return x
+
+
+def bsdf_call(bsdf, method: str, x: dict):
+    """``bsdf.method`` (one of :data:`BSDF_METHODS`) on the inputs of :func:`bsdf_inputs`."""
+    if method == "sample":
+        return bsdf.sample(x["ctx"], x["si"], x["sample1"], x["sample2"])
+    return getattr(bsdf, method)(x["ctx"], x["si"], x["wo"])
+
+
+def variables_created(run) -> int:
+    """The Dr.Jit variables ``run()`` creates while it is traced: the
+    variable creations in Dr.Jit's trace log, less those that value numbering
+    answered with an existing variable ("lvn hit"). Mitsuba's C++ built-ins
+    are counted the same way."""
+    log, level = io.StringIO(), dr.log_level()
+    with contextlib.redirect_stdout(log):            # (Dr.Jit logs through Python's stdout)
+        dr.set_log_level(dr.LogLevel.Trace)
+        try:
+            out = run()
+        finally:
+            dr.set_log_level(level)
+    del out
+    return sum(1 for line in log.getvalue().splitlines()
+               if line.startswith("jit_var_new") and "[lvn hit]" not in line)
 
 
 # ----------------------------------------------------------------------------
@@ -136,7 +186,6 @@ def render_sphere(bsdf: dict, res: int = 128, spp: int = 16, **scene_options) ->
 def bitmap(values) -> dict:
     """A ``bitmap`` texture of an (H, W) or (H, W, C) array: nearest texels,
     values as stored (no sRGB), clamped at the edges."""
-    import mitsuba as mi
     data = np.asarray(values, dtype=np.float32)
     return {"type": "bitmap", "bitmap": mi.Bitmap(data if data.ndim == 3 else data[..., None]),
             "raw": True, "filter_type": "nearest", "wrap_mode": "clamp"}
@@ -146,7 +195,6 @@ def plane_scene(bsdf: dict, light, res: int = 32) -> dict:
     """A square plane that fills the view from +z, lit by one point light at
     ``light``, rendered by the scan-line integrator without its clamp (direct
     light: deterministic for a fixed seed, and unbiased in hdr mode)."""
-    import mitsuba as mi
     return {"type": "scene",
             "integrator": {"type": "scanline", "clamp": False, "hide_emitters": True},
             "sensor": camera(res, 40, origin=(0.0, 0.0, 3.0)),
@@ -170,8 +218,6 @@ def fit_texture(truth: dict, start: dict, key: str, lights, steps: int, lr: floa
     gradients with the last position (measured with its ``roughconductor``
     too). The step is not frozen (:class:`mi_brdfs.render.frozen.GradientStep`
     records one scene's render, loss and backward pass)."""
-    import drjit as dr
-    import mitsuba as mi
     references = [dr.detach(mi.render(mi.load_dict(plane_scene(truth, light, res)),
                                       spp=spp, seed=seed)) for light in lights]
     scenes = [mi.load_dict(plane_scene(start, light, res)) for light in lights]

@@ -1,13 +1,18 @@
 """What the commands' shared arguments mean: checked numbers (argparse types
 whose bad value is one line, exit 1) and Mitsuba's settings (variant,
-threads, log level). Used by the CLI and by the tools that parse arguments
-of their own (the explorer's backend)."""
+threads, log level). Used by the CLI, by the render command and by the tools
+that parse arguments of their own (the explorer's backend)."""
 from __future__ import annotations
 
 import argparse
 import math
 import sys
 from typing import Callable
+
+import drjit as dr
+import mitsuba as mi
+
+import mi_brdfs
 
 from .errors import CLIError, one_line
 
@@ -43,9 +48,6 @@ def real(low: float, high: float) -> Callable[[str], float]:
 
 
 def set_variant(name: str | None) -> str:
-    import mitsuba as mi
-
-    import mi_brdfs
     if name:
         if name not in mi.variants():
             raise CLIError(f"-m {name} is not a Mitsuba variant here; valid: "
@@ -59,14 +61,11 @@ def set_variant(name: str | None) -> str:
 
 def set_threads(count: int | None) -> None:
     if count is not None:
-        import drjit as dr
         dr.set_thread_count(count)
 
 
 def set_verbosity(level: int) -> None:
     """0: warnings only; 1: Mitsuba's Info; 2: Debug (and Dr.Jit's Info); 3: Trace."""
-    import drjit as dr
-    import mitsuba as mi
     mi.set_log_level([mi.LogLevel.Warn, mi.LogLevel.Info, mi.LogLevel.Debug,
                       mi.LogLevel.Trace][min(level, 3)])
     if level >= 2:

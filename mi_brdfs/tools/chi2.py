@@ -23,8 +23,8 @@ step). The grids are nested so that the change cannot vanish by accident:
 across a step the error is the step's offset from the middle of the
 interval holding it, and halving the interval moves that middle by a
 quarter of its length. (Doubling the points instead can put a symmetric
-pair around the same middle at both levels: a toon band's edge was then
-"converged" at 8 and 16 points, wrong by 1.5 % of a row of cells.)
+pair around the same middle at both levels: a toon band's edge then reads
+as converged at 8 and 16 points, wrong by 1.5 % of a row of cells.)
 Smooth cells stop after one doubling; the cells of a sharp lobe or at a
 discontinuity (the toon model's bands) are refined up to ``max_ires``. A
 cell that has not converged there is counted in :attr:`unconverged`, and

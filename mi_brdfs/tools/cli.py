@@ -12,17 +12,14 @@ Mitsuba's own ``mitsuba`` command.
     mi-brdfs fit TARGET [TARGET ...] -o REPORT_DIR [--models NAME ...] [--quick]
                  [--metric cosine|ngan] [-j N] [--scheduler ADDRESS]
                     (see mi_brdfs/tools/fit; exit 1 when a fit fails)
+    mi-brdfs explore [--port PORT] [--host HOST] [--no-browser]
+                    (see mi_brdfs/tools/explore)
     mi-brdfs --version
 
-``render`` takes a scene file or the name of a bundled scene (``mi-brdfs
-scenes`` lists them), loads it with its ``-D`` defaults (as ``mitsuba -D``),
-renders the spp in passes with different seeds (Mitsuba's JIT variants report
-no progress of their own) and averages them, with a progress bar on a
-terminal and plain lines in a pipe. Each ``-o`` is written by its extension
-(:mod:`mi_brdfs.render.imagefile`): ``.exr`` keeps every film channel and the
-render's metadata, ``.png``/``.jpg`` are tone-mapped 8-bit sRGB. Without
-``-o`` the output is ``SCENE.exr`` beside the scene file, as ``mitsuba``
-writes it (a bundled scene's: in the current folder).
+The parsers and the dispatch only: each command is a module or package of
+its own, usable from Python (``render``: :mod:`.render`; ``compare``:
+:mod:`.compare`; ``validate``, ``bench``, ``fit``, ``explore``: the packages
+of those names).
 
 ``-m/--variant`` picks the Mitsuba variant, ``-t/--threads`` Dr.Jit's thread
 count, ``-v`` (repeatable) raises Mitsuba's log level (Info, Debug, Trace).
@@ -36,181 +33,36 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-import time
-from importlib import metadata
 from typing import NoReturn
 
-from .. import _interrupt as interrupt
-from ..render import imagefile, tonemap
-from . import destinations
-from .arguments import info_logger, integer, real, set_threads, set_variant, set_verbosity
-from .errors import CLIError, one_line
-from .progress import Progress
+from .. import _interrupt as interrupt, scenes
+from ..render import tonemap
+from . import render
+from .explore import add_parser as add_explore
+from .arguments import integer, real, set_threads, set_verbosity
+from .errors import one_line
 
 DESCRIPTION = ("The course lecture's BRDF models as Mitsuba 3 plugins: render scenes, compare "
                "renders, validate the plugins, benchmark them and fit them to materials. "
                "Each command's flags: mi-brdfs COMMAND --help.")
-UINT32_MAX = 2**32 - 1
 REPORT_MODULES = ("matplotlib", "scipy", "flip_evaluator")
-KNOWN_DEFINES = {"spp": 1, "res": 1}      # the bundled scenes' numeric defaults -> minimum
-
-
-
-
-
-def parse_defines(pairs: list[str]) -> dict[str, str]:
-    defines = {}
-    for pair in pairs:
-        key, sep, value = pair.partition("=")
-        if not sep or not key:
-            raise CLIError(f"-D expects key=value, got {pair!r}")
-        if key in KNOWN_DEFINES:
-            try:
-                number = int(value)
-            except ValueError:
-                number = None
-            if number is None or number < KNOWN_DEFINES[key]:
-                raise CLIError(f"-D {key}={value} is invalid; valid: an integer >= "
-                               f"{KNOWN_DEFINES[key]}")
-        defines[key] = value
-    return defines
-
 
 
 # ----------------------------------------------------------------------------
 #  render and scenes
 # ----------------------------------------------------------------------------
 
-def resolve_scene(arg: str) -> tuple[str, bool]:
-    """(scene file, bundled?) for a path or a bundled scene's name."""
-    from .. import scenes
-
-    if os.path.isdir(arg):
-        raise CLIError(f"scene {arg} is a folder; give an XML file or a bundled scene's name")
-    if os.path.exists(arg):
-        return arg, False
-    if os.sep not in arg:
-        try:
-            return scenes.path(arg), True
-        except ValueError:
-            pass
-    raise CLIError(f"scene not found: {arg} (not a file; bundled scenes: "
-                   f"{', '.join(scenes.names())})")
-
-
-def default_output(scene: str, bundled: bool) -> str:
-    """SCENE.exr beside the scene file (as ``mitsuba``); a bundled scene's in
-    the current folder (never inside the installed package)."""
-    stem = os.path.splitext(scene)[0]
-    return os.path.basename(stem) + ".exr" if bundled else stem + ".exr"
-
-
-def scene_spp(scene) -> int:
-    return scene.sensors()[0].sampler().sample_count()
-
-
-def film_channel_names(scene) -> list[str]:
-    bitmap = scene.sensors()[0].film().bitmap()
-    return [bitmap.struct_()[i].name for i in range(bitmap.channel_count())]
-
-
-def versions() -> dict[str, str]:
-    def version(dist: str) -> str:
-        try:
-            return metadata.version(dist)
-        except metadata.PackageNotFoundError:
-            return "unknown"
-    return {"mi_brdfs": version("mi_brdfs"), "mitsuba": version("mitsuba"),
-            "drjit": version("drjit")}
-
-
-def check_render_numbers(scene, args: argparse.Namespace, defines: dict[str, str]) -> int:
-    """The spp to render; errors for a scene whose numbers cannot render."""
-    spp = args.spp if args.spp is not None else scene_spp(scene)
-    if spp < 1:
-        where = f"-D spp={defines['spp']}" if "spp" in defines else "its sampler"
-        raise CLIError(f"the scene's sample count is {spp} (from {where}); valid: an integer "
-                       ">= 1 (or give --spp N)")
-    width, height = scene.sensors()[0].film().crop_size()
-    if width < 1 or height < 1:
-        raise CLIError(f"the scene's film is {width}x{height} pixels; valid: at least 1x1")
-    chunks = max(1, min(args.passes, spp))
-    max_seed = (UINT32_MAX - (chunks - 1)) // chunks
-    if args.seed > max_seed:
-        raise CLIError(f"--seed {args.seed} is invalid with {chunks} passes; valid: an integer "
-                       f"from 0 to {max_seed}")
-    return spp
-
-
-def check_bundled_defines(name: str, defines: dict[str, str]) -> None:
-    """The bundled scenes use ``mode`` as the plugins' mode and as the
-    integrator's type: any other value is one line naming the two."""
-    from ..bsdfs.base import MODES
-    mode = defines.get("mode")
-    if mode is not None and mode not in MODES:
-        raise CLIError(f"-D mode={mode} is invalid for the bundled scene {name}; valid: "
-                       f"{', '.join(MODES)}")
-
-
 def cmd_render(args: argparse.Namespace) -> int:
-    scene_path, bundled = resolve_scene(args.scene)
-    defines = parse_defines(args.defines)
-    if bundled:
-        check_bundled_defines(args.scene, defines)
-    targets = args.output or [default_output(scene_path, bundled)]
-    for path in targets:
-        imagefile.check_extension(path)
-        destinations.check_output_file(path)
-    if args.tonemap not in tonemap.OPERATORS:
-        raise CLIError(f"--tonemap {args.tonemap} is unknown; valid: {', '.join(tonemap.OPERATORS)}")
-
-    variant = set_variant(args.variant)
-    set_threads(args.threads)
-    set_verbosity(args.verbose)
-    import drjit as dr
-    import mitsuba as mi
-
-    from ..render import memory
-    from ..render.passes import render_passes, split_passes
-
-    # parallel=False: serial loading is cheap. (Parallel loading failed now and then
-    # while the plugins' constructors called the loader: see _binding.create.)
-    scene = mi.load_file(scene_path, parallel=False, **defines)
-    spp = check_render_numbers(scene, args, defines)
-
-    log = info_logger(args.prog, args.verbose)
-    chunks = split_passes(spp, args.passes)        # the passes that run (none empty)
-    problem = memory.refusal(memory.need(scene))
-    if problem:
-        raise CLIError(problem)
-    width, height = scene.sensors()[0].film().crop_size()
-    log(f"{scene_path}: {width}x{height}, {spp} spp in {len(chunks)} passes, "
-        f"seed {args.seed}, "
-        f"variant {variant}, {dr.thread_count()} threads")
-    progress = Progress(args.prog, enabled=not args.quiet)
-    start = time.perf_counter()
-    try:
-        image = render_passes(scene, spp, args.passes, args.seed, show=progress, log=log)
-    finally:
-        progress.close()
-    seconds = time.perf_counter() - start
-    try:
-        names = imagefile.channel_names(film_channel_names(scene), image.shape[2])
-    except Exception:                       # a film without a bitmap: generic names
-        names = imagefile.channel_names([], image.shape[2])
-    info = {"scene": os.path.abspath(scene_path), "spp": sum(chunks), "seed": args.seed,
-            "passes": len(chunks), "pass_spp": ",".join(map(str, chunks)), "variant": variant,
-            "defines": " ".join(f"{k}={v}" for k, v in defines.items()),
-            **versions()}
-    for path in targets:
-        imagefile.write(path, image, names, info, args.tonemap, args.exposure)
-    print(f"{args.scene}: {image.shape[1]}x{image.shape[0]}, {spp} spp in {seconds:.1f} s -> "
-          f"{', '.join(targets)}")
+    done = render.render(args.scene, args.output, args.defines, spp=args.spp,
+                         passes=args.passes, seed=args.seed, tonemap_name=args.tonemap,
+                         exposure=args.exposure, variant=args.variant, threads=args.threads,
+                         verbose=args.verbose, quiet=args.quiet, prog=args.prog)
+    print(f"{args.scene}: {done.width}x{done.height}, {done.spp} spp in {done.seconds:.1f} s -> "
+          f"{', '.join(done.outputs)}")
     return 0
 
 
 def cmd_scenes(args: argparse.Namespace) -> int:
-    from .. import scenes
     for name in scenes.names():
         print(f"{name:15} {scenes.path(name)}")
     return 0
@@ -221,7 +73,7 @@ def cmd_scenes(args: argparse.Namespace) -> int:
 # ----------------------------------------------------------------------------
 
 def cmd_compare(args: argparse.Namespace) -> int:
-    from . import compare
+    from . import compare           # here: start-up of every other command (measured)
 
     thresholds = {k: getattr(args, k) for k in compare.THRESHOLDS}
     results = compare.compare(args.reference, args.tests, args.output, thresholds,
@@ -238,7 +90,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
-    from . import validate
+    from . import validate          # here: it needs the reports extra (SciPy)
 
     set_threads(args.threads)
     set_verbosity(args.verbose)
@@ -255,7 +107,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
-    from . import bench
+    from . import bench             # here: it needs the reports extra (SciPy)
 
     set_threads(args.threads)
     set_verbosity(args.verbose)
@@ -269,7 +121,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
 
 def cmd_fit(args: argparse.Namespace) -> int:
-    from . import fit
+    from . import fit               # here: start-up of every other command (measured)
     from .fit import sweep
 
     set_verbosity(args.verbose)
@@ -315,7 +167,7 @@ def common(threads: bool = True, variant: bool = False) -> Parser:
 
 
 def parser() -> Parser:
-    v = versions()
+    v = render.versions()
     p = Parser(prog="mi-brdfs", description=DESCRIPTION)
     p.add_argument("--version", action="version",
                    version=f"mi-brdfs {v['mi_brdfs']} (Mitsuba {v['mitsuba']}, "
@@ -331,11 +183,11 @@ def parser() -> Parser:
                    help="output file, by extension: .exr (every channel, metadata), .png or "
                         ".jpg (tone-mapped 8-bit sRGB); repeatable "
                         "(default: SCENE.exr beside the scene file)")
-    r.add_argument("--spp", type=integer(1, UINT32_MAX), default=None,
+    r.add_argument("--spp", type=integer(1, render.UINT32_MAX), default=None,
                    help="samples per pixel (default: the scene's)")
     r.add_argument("--passes", type=integer(1, 4096), default=8,
                    help="render in this many passes (default 8)")
-    r.add_argument("--seed", type=integer(0, UINT32_MAX), default=0,
+    r.add_argument("--seed", type=integer(0, render.UINT32_MAX), default=0,
                    help="seed of the first pass; pass k uses seed + k (default 0)")
     r.add_argument("--tonemap", default="clamp", choices=list(tonemap.OPERATORS),
                    help="tone mapping of .png/.jpg outputs (default clamp)")
@@ -404,7 +256,6 @@ def parser() -> Parser:
                    help="run on this Dask distributed scheduler (e.g. tcp://host:8786) "
                         "instead of local processes")
     f.set_defaults(run=cmd_fit)
-    from .explore import add_parser as add_explore      # mi-brdfs explore (tools/explore)
     add_explore(sub, common)
     for name, command in sub.choices.items():
         command.set_defaults(prog=command.prog)

@@ -61,6 +61,8 @@ from typing import Iterator
 
 import numpy as np
 
+import mitsuba as mi
+
 from ..render import exr, tonemap
 from . import destinations, measures, pages
 from .pages import esc
@@ -101,7 +103,6 @@ def load(path: str, layer: str | None = None) -> np.ndarray:
         except (ValueError, OSError) as error:
             raise CompareError(str(error)) from None
     if ext in LDR_TYPES:
-        import mitsuba as mi
         try:
             bitmap = mi.Bitmap(path)
         except Exception:
@@ -202,7 +203,7 @@ def _errors(r: np.ndarray, t: np.ndarray, axis, peak: float) -> dict:
 def flip(ref: np.ndarray, test: np.ndarray, mode: str = "hdr") -> tuple[float, np.ndarray]:
     """Mean FLIP error and the (H, W) error map, in ``mode`` 'hdr' (linear
     values) or 'ldr' (clamped to [0, 1] and sRGB-encoded)."""
-    import flip_evaluator
+    import flip_evaluator               # optional: the reports extra
 
     if mode not in FLIP_MODES:
         raise CompareError(f"unknown FLIP mode {mode!r}; valid: {', '.join(FLIP_MODES)}")
@@ -287,7 +288,7 @@ def _save_map(path: str, data: np.ndarray, cmap: str, vmin: float, vmax: float, 
               over: str | None = None, under: str | None = None) -> None:
     """An error map with a colour bar; values beyond [vmin, vmax] drawn in the
     ``over``/``under`` colours, shown as the colour bar's end triangles."""
-    import matplotlib
+    import matplotlib                   # optional: the reports extra
     from matplotlib.figure import Figure    # no pyplot: no global backend change
 
     colours = matplotlib.colormaps[cmap].with_extremes(over=over, under=under)

@@ -1,8 +1,8 @@
 """The one error type of the tools and how any error reads as one line.
 
-Below every command (compare, validate, bench, fit, explore) and the CLI
-that runs them: a tool raises :class:`CLIError` for bad input it found
-itself, and the CLI prints any error through :func:`one_line`.
+Below every command (render, compare, validate, bench, fit, explore) and
+the CLI that runs them: a tool raises :class:`CLIError` for bad input it
+found itself, and the CLI prints any error through :func:`one_line`.
 """
 from __future__ import annotations
 

@@ -12,6 +12,9 @@ from typing import Sequence
 
 import numpy as np
 
+import drjit as dr
+import mitsuba as mi
+
 RELMSE_OFFSET = 0.01     # keeps black reference pixels from dominating (pbrt's relative MSE)
 
 
@@ -36,8 +39,6 @@ def pareto(points: Sequence[tuple[float, float]]) -> list[bool]:
 
 def render_waited(scene, spp: int, seed: int):
     """``mi.render``, evaluated and waited for: its time is the render's."""
-    import drjit as dr
-    import mitsuba as mi
     image = mi.render(scene, spp=spp, seed=seed)
     dr.eval(image)
     dr.sync_thread()

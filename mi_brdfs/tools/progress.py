@@ -12,6 +12,8 @@ from __future__ import annotations
 import sys
 from typing import TextIO
 
+from tqdm import tqdm
+
 
 def eta(history: list[tuple[int, float]], total: int) -> float | None:
     """Seconds left, from ``history`` = [(done_spp, elapsed_s) after each pass]:
@@ -64,8 +66,6 @@ class Progress:
             self.stream.flush()
 
     def _bar(self, done: int, total: int, left: float | None) -> None:
-        from tqdm import tqdm
-
         if self.bar is None:
             self.bar = tqdm(total=total, desc=self.label, unit=self.unit, file=self.stream,
                             dynamic_ncols=True, leave=True,

@@ -32,6 +32,11 @@ import os
 import subprocess
 import sys
 
+from ..bsdfs import PLUGINS, cases, compensation
+from ..render.exr import write_atomically
+from .fit import trade
+from .tables import specs
+
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 README = os.path.join(ROOT, "README.md")
 REPORT = os.path.join(ROOT, "docs", "validation", "results.json")
@@ -41,7 +46,6 @@ TRADE = os.path.join(ROOT, "docs", "benchmarks", "trade", "fits.json")
 def plugin_table() -> str:
     """The README's table of plugins: name (linking its module), what it is
     (its module's title), what it is checked against."""
-    from ..bsdfs import PLUGINS, cases
     rows = ["| plugin | model | checked against |", "|---|---|---|"]
     for cls in PLUGINS:
         module = sys.modules[cls.__module__]
@@ -54,7 +58,6 @@ def plugin_table() -> str:
 def which_model_table() -> str:
     """The README's table "which model for my material", from the committed
     trade sweep."""
-    from .fit import trade
     with open(TRADE, encoding="utf-8") as f:
         records = json.load(f)
     return trade.summary(records, dict((spec, label) for label, spec in trade.TARGETS))
@@ -76,8 +79,6 @@ def readme_with_tables(text: str) -> str:
 def missing_tables() -> list[str]:
     """The names of the declared tables the shipped file lacks (or holds with
     other axes)."""
-    from ..bsdfs import compensation
-    from .tables import specs
     missing = []
     for spec in specs():
         try:
@@ -98,7 +99,6 @@ def report_runs(results: dict) -> set[tuple]:
 
 def planned_runs() -> set[tuple]:
     """What ``mi-brdfs validate`` (full) would run now, from the models' cases."""
-    from ..bsdfs import cases
     return ({("lobes", name) for name in cases.lobe_configs()}
             | {("furnace", name, label) for name in cases.ALL
                for label, _ in cases.report_furnace(name)}
@@ -149,8 +149,6 @@ def main(argv: list[str] | None = None) -> int:
         subprocess.run([sys.executable, "-m", "mi_brdfs.tools.tables", "--only", *tables],
                        check=True)
     if readme_with_tables(readme) != readme:
-        from ..render.exr import write_atomically
-
         def write(tmp: str) -> None:
             with open(tmp, "w", encoding="utf-8") as f:
                 f.write(readme_with_tables(readme))

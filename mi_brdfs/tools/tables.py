@@ -20,6 +20,8 @@ values and a walk with another seed and a quarter of the paths, on a few μ
 rows, and (2) the interpolation error of W along α and F0 at cell centres of
 those rows (with the same seed: the walk's noise, correlated between nodes,
 mostly cancels).
+
+Needs SciPy (the ``reports`` extra), as the walk does.
 """
 from __future__ import annotations
 
@@ -35,8 +37,10 @@ import drjit as dr
 import mitsuba as mi
 
 from .._jit import from_numpy
-from ..bsdfs import compensation
+from ..bsdfs import PLUGINS, compensation
 from ..bsdfs.grid import hemisphere_direction
+from . import groundtruth
+from .groundtruth import MU_MIN, WALK_SEED
 
 MU_85 = 0.0871557      # cos 85°
 
@@ -45,9 +49,7 @@ MU_85 = 0.0871557      # cos 85°
 #  Building the single-scattering tables (JIT variants)
 # ----------------------------------------------------------------------------
 
-MU_MIN = 1e-4             # the cos θ at which the μ = 0 node is computed
 SEED = 20261130           # of the quadrature's jitter
-WALK_SEED = 20160701      # of the walk
 
 
 def build(spec: compensation.AlbedoSpec, samples: int | None = None, batch: int = 1 << 22) -> np.ndarray:
@@ -106,7 +108,6 @@ def build(spec: compensation.AlbedoSpec, samples: int | None = None, batch: int 
 def specs() -> list:
     """Every table every model declares (its ``tables()``), AlbedoSpecs and
     WalkSpecs, each once."""
-    from ..bsdfs import PLUGINS
     found = []
     for cls in PLUGINS:
         for spec in cls.tables():
@@ -151,8 +152,6 @@ def interpolation_error(spec, table, samples: int, bounded: bool = False) -> tup
 def check_walk(spec, paths: int, log) -> str:
     """(MC noise, interpolation error along the roughness axes and F0) of a
     walk table, on four μ rows (at φ = 0 and 90° for an anisotropic one)."""
-
-    from . import groundtruth
     shipped = compensation.shipped(spec)
     rows = [k * (spec.axes[0].n - 1) // 8 for k in (1, 3, 5, 7)]   # 33 nodes: rows 4, 12, 20, 28
     again = groundtruth.table(spec, paths=paths, seed=WALK_SEED + 1, rows=rows)
@@ -244,7 +243,6 @@ def main(argv: list[str] | None = None) -> int:
                   f"(up to 85 deg: {inter85:.1e}{bounded}) [{time.perf_counter() - start:.0f} s]")
             continue
         if walk:
-            from . import groundtruth
             out[spec.name] = groundtruth.table(spec, paths=args.paths, log=log)
             what = f"{args.paths or spec.paths} paths"
         else:

@@ -15,6 +15,7 @@ from mi_brdfs.bsdfs import BY_NAME
 from mi_brdfs.bsdfs import cases
 from mi_brdfs.bsdfs.compensation import AlbedoSpec
 from mi_brdfs.tools import bench, cli
+from mi_brdfs.tools.analysis import BSDF_METHODS, bsdf_inputs
 from mi_brdfs.tools.bench import anatomy
 
 # cook_torrance as roughconductor, GGX: the twin the tracing checks look into
@@ -146,7 +147,7 @@ def test_kernels_and_tracing_every_pair_and_method(results):
     for group, names in (("kernels", pairs), ("tracing", pairs | related)):
         rows = r["groups"][group]
         assert {(row["name"], row["method"]) for row in rows} == {
-            (n, m) for n in names for m in bench.BSDF_METHODS}
+            (n, m) for n in names for m in BSDF_METHODS}
         assert all(row["ratio"] > 0 for row in rows)
     assert all(row["plugin_ops"] > 0 and row["builtin_ops"] > 0 for row in r["groups"]["kernels"])
     tracing = {(row["name"], row["method"]): row for row in r["groups"]["tracing"]}
@@ -198,7 +199,6 @@ def test_the_floor_is_the_builtins_bsdf(floor, builtin):
     import mitsuba as mi
 
     from mi_brdfs.tools.bench import floor as floors
-    from mi_brdfs.tools.bench.measure import bsdf_inputs
     floors.register()
     x = bsdf_inputs(4096)
     ours, ref = mi.load_dict(floor), mi.load_dict(builtin)

@@ -31,14 +31,15 @@ from __future__ import annotations
 import os
 import time
 
+from .. import destinations
+from . import plots, report
 from .groups import GROUPS, Group
-from .measure import (BSDF_METHODS, FULL, QUICK, References, Settings, efficiency, scene_dict,
+from .measure import (FULL, QUICK, References, Settings, efficiency, machine, scene_dict,
                       spheres_scene)
 from .workers import in_subprocess
 
 __all__ = ["run", "require", "GROUPS", "Group", "Settings", "QUICK", "FULL", "References",
-           "efficiency", "scene_dict", "spheres_scene", "in_subprocess",
-           "BSDF_METHODS"]
+           "efficiency", "scene_dict", "spheres_scene", "in_subprocess"]
 
 DEFAULT_CACHE = os.path.join(os.path.expanduser("~"), ".cache", "mi_brdfs", "references")
 
@@ -56,10 +57,6 @@ def run(out_dir: str, quick: bool = False, only: list[str] | None = None,
     """Run the groups (``only``, or all) and write the report to ``out_dir``;
     the results. Unknown groups, missing dependencies and an unusable report
     folder are refused before any work."""
-    from .. import destinations
-    from . import plots, report
-    from .measure import machine
-
     names = only or list(GROUPS)
     for name in names:
         if name not in GROUPS:

@@ -3,8 +3,8 @@ function calls, texture evaluations, MicrofacetDistribution objects built,
 BSDF methods it calls again, helpers called more than once; and how often a
 path-traced render calls each method. Measured with cProfile, with the
 plugin's textures and ``mi.MicrofacetDistribution`` replaced by counting
-wrappers for the duration of one call. And the Dr.Jit variables one call
-creates, of any BSDF, from Dr.Jit's trace log (:func:`variables_created`).
+wrappers for the duration of one call. (The Dr.Jit variables one call
+creates, of any BSDF: :func:`mi_brdfs.tools.analysis.variables_created`.)
 
 Plugin code is told by where its file lies, inside this installed package
 and outside its tools, never by a name in the path: a virtual environment
@@ -13,11 +13,16 @@ path that holds that name too (the counts of calls by Mitsuba then read 0).
 """
 from __future__ import annotations
 
+import cProfile
 import functools
 import os
+import pstats
 
+import mitsuba as mi
+
+from ..analysis import BSDF_METHODS, bsdf_call
 from ..measures import render_waited
-from .measure import BSDF_METHODS, bsdf_call, scene_dict
+from .measure import scene_dict
 
 PACKAGE = os.path.dirname(os.path.dirname(os.path.dirname(os.path.realpath(__file__))))
 TOOLS = os.path.join(PACKAGE, "tools")
@@ -63,8 +68,6 @@ class _CountingTexture:
 
 def profile(run) -> dict:
     """cProfile's statistics of ``run()``: {(file, line, name): (cc, nc, tt, ct, callers)}."""
-    import cProfile
-    import pstats
     profiler = cProfile.Profile()
     profiler.enable()
     run()
@@ -76,7 +79,6 @@ def call_anatomy(bsdf, method: str, x: dict) -> dict:
     """What one traced call of a plugin method does: Python function calls,
     texture evaluations, MicrofacetDistribution objects built, the BSDF
     methods it calls again, and the helpers called more than once."""
-    import mitsuba as mi
     textures = {k: v for k, v in vars(bsdf).items() if isinstance(v, mi.Texture)}
     evals, built = [0], [0]
     original = mi.MicrofacetDistribution
@@ -102,31 +104,9 @@ def call_anatomy(bsdf, method: str, x: dict) -> dict:
                                   if n > 1 and not bsdf_method(k))}
 
 
-def variables_created(run) -> int:
-    """The Dr.Jit variables ``run()`` creates while it is traced: the
-    variable creations in Dr.Jit's trace log, less those that value numbering
-    answered with an existing variable ("lvn hit"). Mitsuba's C++ built-ins
-    are counted the same way."""
-    import contextlib
-    import io
-
-    import drjit as dr
-    log, level = io.StringIO(), dr.log_level()
-    with contextlib.redirect_stdout(log):            # (Dr.Jit logs through Python's stdout)
-        dr.set_log_level(dr.LogLevel.Trace)
-        try:
-            out = run()
-        finally:
-            dr.set_log_level(level)
-    del out
-    return sum(1 for line in log.getvalue().splitlines()
-               if line.startswith("jit_var_new") and "[lvn hit]" not in line)
-
-
 def calls_in_a_render(config: dict) -> dict[str, list[int]]:
     """Per BSDF method: [calls from outside the plugins (Mitsuba's), all calls]
     of one plugin instance while one path-traced render (depth 3) is traced."""
-    import mitsuba as mi
     scene = mi.load_dict(scene_dict(config, 8, plane=False), parallel=False)
     stats = profile(lambda: render_waited(scene, 1, seed=0))
     counts = {m: [0, 0] for m in BSDF_METHODS}

@@ -18,11 +18,16 @@ from typing import Callable
 
 import numpy as np
 
+import mitsuba as mi
+
 from ...bsdfs import cases
+from ...bsdfs.compensation import AlbedoSpec
+from ..explore import latency
+from ..fit.trade import TARGETS, fit_materials
 from ..measures import relmse
+from ..tables import build
 from . import plots, report
-from .measure import (FULL, References, Settings, alternating, efficiency, image,
-                      scene_dict, timed)
+from .measure import FULL, References, Settings, alternating, efficiency, image, scene_dict, timed
 from .workers import in_subprocess
 
 
@@ -48,7 +53,6 @@ def builtin(s: Settings, refs: References) -> list[dict]:
     """Python plugin vs Mitsuba's C++ built-in, the same BSDF, scene and spp: the
     time ratio, and where the time goes (Python tracing, LLVM codegen, kernel
     execution, from Dr.Jit's kernel history)."""
-    import mitsuba as mi
     rows = []
     for name, ours, builtin in ((t.label, t.ours, t.builtin) for t in cases.twins()):
         t_ours = timed(mi.load_dict(scene_dict(ours, s.res)), s.spp, s.repeats)
@@ -65,7 +69,6 @@ def builtin(s: Settings, refs: References) -> list[dict]:
 def models(s: Settings, refs: References) -> list[dict]:
     """Render time per spp of every model and variant (each model's cases().costs),
     relative to lambert."""
-    import mitsuba as mi
     rows = []
     for name, config in cases.costs():
         t = timed(mi.load_dict(scene_dict(config, s.res)), s.spp, s.repeats)
@@ -80,7 +83,6 @@ def models(s: Settings, refs: References) -> list[dict]:
 def oren_nayar(s: Settings, refs: References) -> list[dict]:
     """The Oren-Nayar table at several resolutions vs the exact formulas: time
     and error against the exact render (same seed: no noise)."""
-    import mitsuba as mi
     _, base = cases.of("oren_nayar").variants[0]
     exact_scene = mi.load_dict(scene_dict({**base, "method": "exact"}, s.res))
     exact = timed(exact_scene, s.spp, s.repeats)
@@ -104,7 +106,6 @@ def sampling(s: Settings, refs: References) -> list[dict]:
     """Glossy lobes: cosine-hemisphere vs the lobe's importance sampling (and
     full-distribution vs visible-normal microfacet sampling), error at equal
     spp and efficiency."""
-    import mitsuba as mi
     rows = []
     for name, config, strategies in cases.every("sampling"):
         reference = refs.get(scene_dict({**config, **strategies[0][1]}, s.res))
@@ -124,7 +125,6 @@ def sampling(s: Settings, refs: References) -> list[dict]:
 def integrators(s: Settings, refs: References) -> list[dict]:
     """Scan-line direct lighting, Mitsuba's ``direct``, ``path`` with max depth
     2, 3 and 8, against a converged path-traced reference."""
-    import mitsuba as mi
     bsdf = GLOSSY
     reference = refs.get(scene_dict(bsdf, s.res, REFERENCE_INTEGRATOR))
     rows = []
@@ -139,7 +139,6 @@ def integrators(s: Settings, refs: References) -> list[dict]:
 
 def convergence(s: Settings, refs: References) -> list[dict]:
     """Error vs spp (log-log) and its slope (about -1 for relMSE)."""
-    import mitsuba as mi
     d = scene_dict(GLOSSY, s.res)
     reference = refs.get(d)
     scene = mi.load_dict(d)
@@ -157,7 +156,6 @@ def convergence(s: Settings, refs: References) -> list[dict]:
 
 def scaling(s: Settings, refs: References) -> list[dict]:
     """Render time vs resolution and vs number of lights (scan-line)."""
-    import mitsuba as mi
     bsdf, integrator = SCALING
     rows = []
     for res in s.resolutions:
@@ -174,7 +172,6 @@ def lobes(s: Settings, refs: References) -> list[dict]:
     renders at the cost of the model without that lobe (the two taking turns
     in one process, medians: timed one after the other, a drift of the
     machine's load would read as the cost of a dead lobe)."""
-    import mitsuba as mi
     rows = []
     for name, off, reference in cases.every("lobes_off"):
         flags = mi.load_dict(off).flags()
@@ -195,10 +192,6 @@ def energy(s: Settings, refs: References) -> list[dict]:
     energy_compensation on vs off (same scene and spp; on and off taking turns
     in one process, medians; wall and kernel execution time), and the time to
     build its albedo table (as python -m mi_brdfs.tools.tables does)."""
-    import mitsuba as mi
-
-    from ...bsdfs.compensation import AlbedoSpec
-    from ..tables import build
     built: dict[str, float] = {}
     rows = []
     for name, config in cases.every("energy"):
@@ -234,12 +227,10 @@ def explore(s: Settings, refs: References) -> list[dict]:
     128² image, slider -> plot data (the page's 100 ms budget), re-render to
     the first pass and to 256 spp after a change, and a fit; medians and
     maxima over the slider moves."""
-    from ..explore import latency
     return latency.measure(moves=20 if s is FULL else 3)
 
 
 def explore_finding(rows: list[dict]) -> str:
-    from ..explore import latency
     return latency.finding(rows)
 
 
@@ -333,7 +324,6 @@ def trade(s: Settings, refs: References, out_dir: str) -> list[dict]:
     material's own plugin (a 90 % interval) and its traced operations; the fit
     report, with its Pareto plots, renders and each fit as XML, is in the
     folder trade/."""
-    from ..fit.trade import TARGETS, fit_materials
     targets = TARGETS[:s.trade_targets or None]
     labels = {spec: label for label, spec in targets}
     records = fit_materials(os.path.join(out_dir, "trade"), quick=s is not FULL,

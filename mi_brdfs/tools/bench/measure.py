@@ -1,6 +1,7 @@
 """How the bench measures: its settings, its scenes, timed renders and their
 split from Dr.Jit's kernel history, errors against cached references, BSDF
-calls on direction pairs, peak memory and the machine.
+peak memory and the machine (the BSDF calls on direction pairs it times are
+:mod:`mi_brdfs.tools.analysis`'s).
 
 Every timing is the median of ``repeats`` renders after a warm-up render that
 compiles the kernels (the warm-up's extra time is reported as compile time).
@@ -15,14 +16,18 @@ import json
 import math
 import os
 import platform
+import resource
 import statistics
 import time
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..._jit import from_numpy
+import drjit as dr
+import mitsuba as mi
+
 from ...bsdfs import cases
+from ...render import exr
 from .. import settings
 from ..analysis import camera
 from ..measures import render_waited
@@ -88,7 +93,6 @@ FLOOR = {"type": "lambert", "reflectance": 0.5}
 def scene_dict(bsdf: dict, res: int, integrator: dict | None = None, lights: int = 1,
                env: float = 0.3, plane: bool = True) -> dict:
     """A sphere on a plane, point lights and a dim constant environment."""
-    import mitsuba as mi
     T = mi.ScalarTransform4f
     d = {
         "type": "scene",
@@ -176,7 +180,6 @@ def measured(run) -> dict:
     """Wall time of ``run()`` (which must evaluate its result) and its split from
     Dr.Jit's kernel history (s): code generation (codegen and LLVM), kernel
     execution, and tracing (the rest: Python and Dr.Jit building the kernels)."""
-    import drjit as dr
     dr.set_flag(dr.JitFlag.KernelHistory, True)
     dr.kernel_history()                              # clear
     start = time.perf_counter()
@@ -199,14 +202,10 @@ class References:
         self.directory, self.spp = directory, spp
 
     def key(self, d: dict) -> str:
-        import mitsuba as mi
         text = json.dumps(d, sort_keys=True, default=str) + f"|{self.spp}|{mi.__version__}"
         return hashlib.sha1(text.encode()).hexdigest()[:16]
 
     def get(self, d: dict) -> np.ndarray:
-        import mitsuba as mi
-
-        from ...render import exr
         path = os.path.join(self.directory, f"ref-{self.key(d)}.exr")
         if os.path.exists(path):
             return exr.read_exr(path).astype(np.float64)
@@ -220,49 +219,14 @@ class References:
 
 
 # ----------------------------------------------------------------------------
-#  BSDF calls on direction pairs (kernels, tracing)
-# ----------------------------------------------------------------------------
-
-BSDF_METHODS = ("eval", "pdf", "eval_pdf", "sample")
-
-
-def bsdf_inputs(lanes: int, seed: int = 1) -> dict:
-    """Random viewer and light directions above the surface and random samples,
-    evaluated (a kernel then holds the BSDF alone)."""
-    import drjit as dr
-    import mitsuba as mi
-    rng = np.random.default_rng(seed)
-
-    def hemisphere():
-        v = rng.normal(size=(3, lanes))
-        v /= np.linalg.norm(v, axis=0)
-        v[2] = np.abs(v[2])
-        return from_numpy(mi.Vector3f, v)
-    si = dr.zeros(mi.SurfaceInteraction3f, lanes)
-    si.wi = hemisphere()
-    si.uv = from_numpy(mi.Point2f, rng.random((2, lanes), dtype=np.float32))
-    x = {"ctx": mi.BSDFContext(), "si": si, "wo": hemisphere(),
-         "sample1": from_numpy(mi.Float, rng.random(lanes, dtype=np.float32)),
-         "sample2": from_numpy(mi.Point2f, rng.random((2, lanes), dtype=np.float32))}
-    dr.eval(x["si"].wi, x["si"].uv, x["wo"], x["sample1"], x["sample2"])
-    return x
-
-
-def bsdf_call(bsdf, method: str, x: dict):
-    if method == "sample":
-        return bsdf.sample(x["ctx"], x["si"], x["sample1"], x["sample2"])
-    return getattr(bsdf, method)(x["ctx"], x["si"], x["wo"])
-
-
-# ----------------------------------------------------------------------------
 #  The process and the machine
 # ----------------------------------------------------------------------------
 
 def peak_mib() -> float:
     """This process's peak resident memory in MiB: Linux's VmHWM, the high-water
-    mark of this program's own memory (ru_maxrss would also count the parent's
-    resident memory at fork time: a worker of a large bench process reported
-    the parent's 397 MiB for every kind), else ru_maxrss."""
+    mark of this program's own memory, else ru_maxrss (which also counts the
+    parent's resident memory at fork time: every worker of a large bench
+    process would read as large as its parent)."""
     try:
         with open("/proc/self/status") as f:
             for line in f:
@@ -270,13 +234,10 @@ def peak_mib() -> float:
                     return int(line.split()[1]) / 1024
     except OSError:
         pass
-    import resource
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
 def machine() -> dict:
-    import drjit as dr
-    import mitsuba as mi
     cpu = platform.processor()
     try:
         with open("/proc/cpuinfo") as f:

@@ -10,7 +10,7 @@ from ..measures import pareto
 
 
 def _figure(size):
-    from matplotlib.figure import Figure
+    from matplotlib.figure import Figure    # optional: the reports extra
     return Figure(figsize=size)
 
 

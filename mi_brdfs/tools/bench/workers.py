@@ -11,20 +11,27 @@ from __future__ import annotations
 import gc
 import json
 import statistics
+import subprocess
+import sys
 import time
 
+import drjit as dr
+import mitsuba as mi
+
 from ...bsdfs import cases
-from .anatomy import call_anatomy, calls_in_a_render, variables_created
+from ...render.frozen import FrozenRender
+from ...render.passes import render_passes
+from ..analysis import BSDF_METHODS, bsdf_call, bsdf_inputs, variables_created
 from ..measures import render_waited
-from .measure import BSDF_METHODS, bsdf_call, bsdf_inputs, measured, peak_mib, spheres_scene
+from . import floor
+from .anatomy import call_anatomy, calls_in_a_render
+from .measure import measured, peak_mib, spheres_scene
 
 RESULT = "mi-brdfs-bench-result "       # the mark of the result line
 
 
 def in_subprocess(task: str, **options) -> dict:
     """Run a worker task in a fresh Python process; its result (with peak_mib)."""
-    import subprocess
-    import sys
     run = subprocess.run([sys.executable, "-m", "mi_brdfs.tools.bench", "--worker", task,
                           json.dumps(options)], capture_output=True, text=True)
     lines = [line for line in run.stdout.splitlines() if line.startswith(RESULT)]
@@ -35,9 +42,6 @@ def in_subprocess(task: str, **options) -> dict:
 
 def main(task: str, options: str) -> int:
     """``python -m mi_brdfs.tools.bench --worker TASK OPTIONS_JSON``: one result line."""
-    import mi_brdfs  # noqa: F401  (LLVM set-up, plugins registered)
-
-    from . import floor
     floor.register()                 # the bare Python BSDFs measured beside the plugins
     result = TASKS[task](**json.loads(options))
     result["peak_mib"] = peak_mib()
@@ -54,12 +58,8 @@ def materials(twin: str, side: str, n: int, res: int, spp: int, repeats: int) ->
     "plugin", "builtin" or "floor") and the medians of ``repeats`` warm
     renders, each split into tracing, code generation and kernel execution (s),
     and the median of ``repeats`` replays of a frozen render."""
-    import drjit as dr
-    import mitsuba as mi
-
-    from ...render.frozen import FrozenRender
     start = time.perf_counter()
-    # parallel=False as in the CLI (see its comment)
+    # parallel=False as in the render command (see its comment in tools/render.py)
     scene = mi.load_dict(spheres_scene(twin, side, n, res), parallel=False)
     result = {"load_s": time.perf_counter() - start}
     first = measured(lambda: render_waited(scene, spp, seed=0))
@@ -83,9 +83,6 @@ def passes(n: int, res: int, spp: int, passes: int, freeze: bool, repeats: int) 
     """``render_passes`` of the spheres scene of the first twin with a spread
     (cook_torrance as roughconductor): the first call in the process (what
     ``mi-brdfs render`` does) and the median of the next."""
-    import mitsuba as mi
-
-    from ...render.passes import render_passes
     twin = next(t for t in cases.twins() if t.spread is not None)
     scene = mi.load_dict(spheres_scene(twin.label, "plugin", n, res), parallel=False)
     messages: list[str] = []
@@ -103,12 +100,10 @@ def kernels(lanes: int, repeats: int) -> dict:
     """Kernel execution time of each BSDF call, plugin and built-in alternating,
     medians over ``repeats`` rounds after a compiling one.
 
-    On one thread: with Dr.Jit's thread pool on cores shared with other
-    processes, a kernel of a few ms took 1.9 or 5.8 ms depending on whether a
-    worker thread was descheduled (whichever kind ran first in a round, per
-    process); single-threaded, both took 1.8-1.9 ms in every round."""
-    import drjit as dr
-    import mitsuba as mi
+    On one thread: on cores shared with other processes, Dr.Jit's thread pool
+    makes a kernel of a few ms take 1.9 or 5.8 ms as one of its threads is
+    descheduled or not (whichever kind runs first in a round, per process);
+    on one thread both take 1.8-1.9 ms in every round."""
     dr.set_thread_count(1)
     x = bsdf_inputs(lanes)
     pairs = [(t.label, mi.load_dict(t.ours), mi.load_dict(t.builtin)) for t in cases.twins()]
@@ -139,7 +134,6 @@ def tracing(lanes: int, calls: int) -> dict:
     """Tracing time of each BSDF call (no evaluation), plugin vs built-in (and
     the floor, where there is one), the Dr.Jit variables each call creates, and
     the anatomy of the plugin's call."""
-    import mitsuba as mi
     pairs = [(t.label, t.ours, t.builtin) for t in cases.twins()] + cases.every("related")
     floors = {t.label: t.floor for t in cases.twins() if t.floor is not None}
     # First, while no other BSDF is alive: a render traces every live instance.

@@ -19,7 +19,8 @@ The package, by concern:
 - :mod:`.preview` — the preview scene and its procedural environment;
 - :mod:`.session` — the computations and the Dr.Jit state;
 - :mod:`.worker` — the one thread that runs them, newest request first;
-- :mod:`.server` — HTTP, the API and the websocket (aiohttp);
+- :mod:`.server` — HTTP, the API and the websocket (aiohttp), and serving
+  them until Ctrl-C;
 - :mod:`.browser` — the headless Chromium that tests the page and takes the
   documentation's screenshots;
 - ``static/`` — the page, its script and its style (Plotly.js comes from the
@@ -33,13 +34,14 @@ from __future__ import annotations
 
 import sys
 
+from .backend import configure, port_number
+
 DEFAULT_PORT = 8765
 LOOPBACK = ("127.0.0.1", "localhost", "::1")
 
 
 def add_parser(sub, common) -> None:
     """The ``explore`` subcommand of ``mi-brdfs`` (``common``: the shared flags)."""
-    from .backend import port_number
     e = sub.add_parser("explore", parents=[common()],
                        help="explore the models in the browser: lobes, albedo, live renders")
     e.add_argument("--port", type=port_number(), default=DEFAULT_PORT,
@@ -51,75 +53,16 @@ def add_parser(sub, common) -> None:
 
 
 def command(args) -> int:
-    from .backend import configure
-    try:
+    try:                        # the explore extra: checked first, for a one-line error
         import aiohttp  # noqa: F401
         import plotly  # noqa: F401
     except ModuleNotFoundError as error:
         raise RuntimeError(f"{error.name} is not installed; mi-brdfs explore needs it: "
                            "pip install 'mi_brdfs[explore]'") from None
+    from . import server        # here: it imports aiohttp
     configure(args.threads, args.verbose)
     if args.host not in LOOPBACK:
         print(f"{args.prog}: warning: listening on {args.host}: anyone who can reach this "
               "machine on that address can use the explorer (it has no authentication)",
               file=sys.stderr)
-    import asyncio
-    return asyncio.run(serve(args.host, args.port, not args.no_browser, args.prog))
-
-
-async def serve(host: str, port: int, browser: bool, prog: str = "mi-brdfs explore") -> int:
-    """Serve until SIGINT or SIGTERM; 0 after a clean stop."""
-    import asyncio
-    import os
-    import signal
-
-    from aiohttp import web
-
-    from .server import make_app
-    from .session import Explorer
-    from .worker import Worker
-
-    jit, walker = Worker("explore-jit"), Worker("explore-walk")
-    try:
-        explorer = jit.call(Explorer)
-        runner = web.AppRunner(make_app(explorer, jit, walker, host), shutdown_timeout=2.0,
-                               access_log=None)
-        await runner.setup()
-        site = web.TCPSite(runner, host, port)
-        try:
-            await site.start()
-        except OSError as error:
-            await runner.cleanup()
-            reason = os.strerror(error.errno).lower() if error.errno else str(error)
-            raise RuntimeError(f"cannot listen on {host}:{port}: {reason}") from None
-        bound = runner.addresses[0][1]
-        shown = f"[{host}]" if ":" in host else host
-        url = f"http://{shown}:{bound}/"
-        print(f"{prog}: serving {url} (Ctrl-C stops it)", flush=True)
-        if browser:
-            open_browser(url, prog)
-        stop = asyncio.Event()
-        loop = asyncio.get_running_loop()
-        for sig in (signal.SIGINT, signal.SIGTERM):
-            loop.add_signal_handler(sig, stop.set)
-        await stop.wait()
-        await runner.cleanup()
-        print(f"{prog}: stopped", flush=True)
-        return 0
-    finally:
-        jit.stop()
-        walker.stop()
-
-
-def open_browser(url: str, prog: str) -> None:
-    """Open ``url`` in the user's graphical browser, in a thread of its own (a
-    browser may take a while to start); on a machine without a display, say
-    where the page is instead (a text browser would take over the terminal)."""
-    import os
-    import threading
-    import webbrowser
-    if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY")
-                                                 or os.environ.get("WAYLAND_DISPLAY")):
-        print(f"{prog}: no display: open {url} in a browser", flush=True)
-        return
-    threading.Thread(target=webbrowser.open, args=(url,), daemon=True).start()
+    return server.run(args.host, args.port, not args.no_browser, args.prog)

@@ -17,8 +17,9 @@ takes:
 - the integrators of the two modes and the tone mapping of
   :mod:`mi_brdfs.render.tonemap`;
 - the fit of :mod:`mi_brdfs.tools.fit` (one model to one target);
-- the command line's conventions (:mod:`mi_brdfs.tools.cli`: checked numbers,
-  threads and log level, errors on one line).
+- the command line's conventions: checked numbers, threads and log level
+  (:mod:`mi_brdfs.tools.arguments`), errors on one line
+  (:mod:`mi_brdfs.tools.errors`).
 """
 from __future__ import annotations
 
@@ -27,6 +28,18 @@ import math
 
 import numpy as np
 
+import mitsuba as mi
+
+import mi_brdfs
+
+from ...bsdfs import PLUGINS
+from ...bsdfs.microfacet import ALPHA_MIN
+from ...bsdfs.params import ParameterError
+from ...render import tonemap
+from ..analysis import eval_at_viewer, hemisphere
+from ..arguments import integer, set_threads, set_verbosity
+from ..errors import one_line
+
 ENERGY_COMPENSATION = "energy_compensation"     # the base's option name
 MODES = ("scanline", "hdr")
 TONEMAP = {"hdr": "aces", "scanline": "clamp"}   # the preview's operator per mode
@@ -34,13 +47,11 @@ TONEMAP = {"hdr": "aces", "scanline": "clamp"}   # the preview's operator per mo
 
 def port_number():
     """The argparse type of ``--port``: the command line's checked integer."""
-    from ..arguments import integer
     return integer(0, 65535)
 
 
 def configure(threads: int | None, verbose: int) -> None:
     """Dr.Jit's thread count and the log level, as the other commands set them."""
-    from ..arguments import set_threads, set_verbosity
     set_threads(threads)
     set_verbosity(verbose)
 
@@ -48,7 +59,6 @@ def configure(threads: int | None, verbose: int) -> None:
 def setup() -> str:
     """Find LLVM, activate ``llvm_ad_rgb`` and register the plugins (importing
     mi_brdfs does all three); returns the variant."""
-    import mi_brdfs
     return mi_brdfs.register()
 
 
@@ -78,7 +88,6 @@ def _title(cls) -> str:
 def course_models() -> list[dict]:
     """Every plugin of the package with its parameters and options (the
     schema of ``GET /api/models``; ``control`` is filled in by the caller)."""
-    from ...bsdfs import PLUGINS
     return [{"name": cls.name, "source": "mi_brdfs", "title": _title(cls),
              "compensable": bool(cls.compensable),
              "params": [_param(p) for p in cls.PARAMS],
@@ -101,7 +110,6 @@ def checked():
     Mitsuba wraps an exception raised in a Python plugin's constructor in a
     RuntimeError that carries the traceback: the plugin's own message is its
     last line, after the exception's class name."""
-    from ...bsdfs.params import ParameterError
     try:
         yield
     except ParameterError as error:
@@ -114,14 +122,12 @@ def checked():
 
 def load(props: dict):
     """``mi.load_dict(props)``, checked (:func:`checked`)."""
-    import mitsuba as mi
     with checked():
         return mi.load_dict(props)
 
 
 def message(error: BaseException) -> str:
     """Any error on one line, as the ``mi-brdfs`` command reports it."""
-    from ..errors import one_line
     return one_line(error)
 
 
@@ -132,7 +138,6 @@ def message(error: BaseException) -> str:
 def lobe_in_plane(bsdf, theta_i: float, n: int) -> tuple[np.ndarray, np.ndarray]:
     """(θ_o in degrees, signed, > 0 on the mirror side; eval per channel, (n, 3))
     in the plane of incidence, the viewer at θ_i."""
-    from ..analysis import eval_at_viewer
     theta = np.linspace(-90.0, 90.0, n)
     t = np.radians(theta)
     wo = np.stack([np.sin(t), np.zeros(n), np.cos(t)], axis=1)
@@ -141,7 +146,6 @@ def lobe_in_plane(bsdf, theta_i: float, n: int) -> tuple[np.ndarray, np.ndarray]
 
 def lobe_over_hemisphere(bsdf, theta_i: float, n: int):
     """θ_o, φ_o (radians, (n, 4n) grids) and eval's channel mean there."""
-    from ..analysis import hemisphere
     return hemisphere(bsdf, theta_i, n)
 
 
@@ -161,8 +165,7 @@ def walk_albedo(material: dict, angles, paths: int, seed: int = 1) -> np.ndarray
     :func:`walk_applies`) by the random walk: k + (1 - k) W(θ; α, F0), W the
     walk's albedo of the Smith microsurface with Schlick's F at every bounce
     and white m_D = m_S = 1. NumPy only (no Dr.Jit): any thread may run it."""
-    from ...bsdfs.microfacet import ALPHA_MIN
-    from ..groundtruth import albedo
+    from ..groundtruth import albedo    # here: the walk needs SciPy, not in the explore extra
     mu = np.cos(np.radians(np.asarray(angles, dtype=np.float64)))
     alpha = max(float(material["alpha"]), ALPHA_MIN)
     w = albedo(material["distribution"], np.maximum(mu, 1e-3), alpha, (float(material["f0"]),),
@@ -191,8 +194,7 @@ def light_scale(mode: str) -> float:
 
 def to_srgb8(image: np.ndarray, mode: str) -> np.ndarray:
     """Linear RGB -> 8-bit sRGB, tone-mapped as the preview does in ``mode``."""
-    from ...render.tonemap import to_srgb8 as convert
-    return convert(image[..., :3], TONEMAP[mode])
+    return tonemap.to_srgb8(image[..., :3], TONEMAP[mode])
 
 
 # ----------------------------------------------------------------------------
@@ -208,16 +210,18 @@ def fit(model: dict, target: dict, options: tuple[str, ...]) -> tuple[dict, floa
     :mod:`mi_brdfs.tools.fit.optimise`); returns (the fitted values, flat,
     colours as lists; the relative BRDF error: 0 identical, 1 as far as
     black; None if it is not finite)."""
-    from ..fit import metric, models, task
+    # here, not above: the command line imports this module at every start
+    # (for --port) and the fit package would add a tenth to its start-up
+    from ..fit import metric, models, optimise, task
     settings = task.QUICK.replace(render=False)
     pairs = metric.pairs(settings.metric, settings.viewers, settings.uniform, settings.lobe)
     fixed = tuple((name, model[name]) for name in options if name in model)
     chosen = models.Model(model["type"], model["type"], fixed)
     target_bsdf = load(target)
-    problem = task.problem(target_bsdf, pairs)
+    problem = optimise.problem(target_bsdf, pairs)
     del target_bsdf
     if not problem.norm > 0:
         raise MaterialError("fit: the target reflects no light at the metric's directions")
-    result = task.fit_model(chosen, problem, settings)
+    result = optimise.fit_model(chosen, problem, settings)
     error = float(result["brdf_error"])
     return dict(result["parameters"]), (error if math.isfinite(error) else None)

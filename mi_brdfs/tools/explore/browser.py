@@ -15,6 +15,7 @@ import argparse
 import contextlib
 import os
 import re
+import selectors
 import shutil
 import signal
 import subprocess
@@ -65,7 +66,6 @@ class Server:
         return self
 
     def _first_line(self) -> str:
-        import selectors
         with selectors.DefaultSelector() as sel:
             sel.register(self.process.stdout, selectors.EVENT_READ)
             if not sel.select(STARTUP_S):
@@ -92,7 +92,7 @@ class Server:
 @contextlib.contextmanager
 def chromium(permissions: tuple[str, ...] = ("clipboard-read", "clipboard-write")):
     """A Playwright browser context on the system's Chromium, a fresh profile."""
-    from playwright.sync_api import sync_playwright
+    from playwright.sync_api import sync_playwright     # optional: the tests' extra
     with tempfile.TemporaryDirectory(prefix="explore-chromium-") as profile, \
             sync_playwright() as playwright:
         context = playwright.chromium.launch_persistent_context(

@@ -62,7 +62,7 @@ def _row(measure: str, config: str, seconds: list[float]) -> dict:
 
 
 async def _measure(url: str, moves: int) -> list[dict]:
-    import aiohttp
+    import aiohttp              # optional: the explore extra
     rows = []
     first = lambda answer: True                                  # noqa: E731
     final = lambda answer: answer.get("final", False)            # noqa: E731

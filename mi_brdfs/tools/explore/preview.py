@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
+import mitsuba as mi
+
 ENV_SIZE = (256, 128)                  # width, height of the environment image
 KEY_DIRECTION = (-1.0, -1.1, -1.4)     # the key light travels this way (from upper right front)
 KEY_IRRADIANCE = 2.5
@@ -48,7 +50,6 @@ def scene_dict(bsdf, res: int, integrator: dict, env, light: float = 1.0) -> dic
     """The preview scene with ``bsdf`` (a loaded BSDF, shared with whoever
     else holds it) at ``res`` × ``res`` pixels; ``env`` an ``mi.Bitmap`` of
     :func:`environment`; ``light`` scales every emitter."""
-    import mitsuba as mi
     look = mi.ScalarTransform4f().look_at(origin=CAMERA["origin"], target=CAMERA["target"],
                                           up=[0.0, 1.0, 0.0])
     return {

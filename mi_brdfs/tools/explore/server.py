@@ -30,6 +30,10 @@ import asyncio
 import itertools
 import json
 import os
+import signal
+import sys
+import threading
+import webbrowser
 from importlib import util
 from urllib.parse import urlsplit
 
@@ -37,6 +41,8 @@ from aiohttp import WSMsgType, web
 
 from .backend import MaterialError, message
 from .material import RequestError
+from .session import Explorer
+from .worker import Worker
 
 STATIC = os.path.join(os.path.dirname(__file__), "static")
 FILES = {"explore.js": "application/javascript", "explore.css": "text/css"}
@@ -297,3 +303,57 @@ class Client:
                 await self.ws.send_str(text)
             except (ConnectionError, RuntimeError):
                 return
+
+
+# ----------------------------------------------------------------------------
+#  Serving until stopped
+# ----------------------------------------------------------------------------
+
+def run(host: str, port: int, browser: bool, prog: str = "mi-brdfs explore") -> int:
+    """:func:`serve` in an event loop of its own."""
+    return asyncio.run(serve(host, port, browser, prog))
+
+
+async def serve(host: str, port: int, browser: bool, prog: str = "mi-brdfs explore") -> int:
+    """Serve until SIGINT or SIGTERM; 0 after a clean stop."""
+    jit, walker = Worker("explore-jit"), Worker("explore-walk")
+    try:
+        explorer = jit.call(Explorer)
+        runner = web.AppRunner(make_app(explorer, jit, walker, host), shutdown_timeout=2.0,
+                               access_log=None)
+        await runner.setup()
+        site = web.TCPSite(runner, host, port)
+        try:
+            await site.start()
+        except OSError as error:
+            await runner.cleanup()
+            reason = os.strerror(error.errno).lower() if error.errno else str(error)
+            raise RuntimeError(f"cannot listen on {host}:{port}: {reason}") from None
+        bound = runner.addresses[0][1]
+        shown = f"[{host}]" if ":" in host else host
+        url = f"http://{shown}:{bound}/"
+        print(f"{prog}: serving {url} (Ctrl-C stops it)", flush=True)
+        if browser:
+            open_browser(url, prog)
+        stop = asyncio.Event()
+        loop = asyncio.get_running_loop()
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            loop.add_signal_handler(sig, stop.set)
+        await stop.wait()
+        await runner.cleanup()
+        print(f"{prog}: stopped", flush=True)
+        return 0
+    finally:
+        jit.stop()
+        walker.stop()
+
+
+def open_browser(url: str, prog: str) -> None:
+    """Open ``url`` in the user's graphical browser, in a thread of its own (a
+    browser may take a while to start); on a machine without a display, say
+    where the page is instead (a text browser would take over the terminal)."""
+    if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY")
+                                                 or os.environ.get("WAYLAND_DISPLAY")):
+        print(f"{prog}: no display: open {url} in a browser", flush=True)
+        return
+    threading.Thread(target=webbrowser.open, args=(url,), daemon=True).start()

@@ -24,6 +24,9 @@ from collections import OrderedDict
 
 import numpy as np
 
+import drjit as dr
+import mitsuba as mi
+
 from . import backend, preview
 from .builtins import builtin_models
 from .material import RequestError, complete, load_dict, parameter_names, python, xml
@@ -53,7 +56,6 @@ def rounded(a, digits: int = 4) -> list:
 
 def png_data_url(rgb8: np.ndarray) -> str:
     """An 8-bit RGB image as a ``data:image/png;base64,...`` URL."""
-    import mitsuba as mi
     stream = mi.MemoryStream()
     mi.Bitmap(np.ascontiguousarray(rgb8), mi.Bitmap.PixelFormat.RGB).write(
         stream, mi.Bitmap.FileFormat.PNG)
@@ -68,8 +70,6 @@ def directional_albedo(bsdf, angles, side: int) -> np.ndarray:
     per block of lanes). A uniform quadrature would need 10⁶ directions per
     angle to resolve a lobe of α = 0.05 to 1 %; a sampler checked by χ² tests
     resolves it with a few thousand."""
-    import drjit as dr
-    import mitsuba as mi
     n = side * side
     lane = dr.arange(mi.UInt32, len(angles) * n)
     block, cell = lane // n, lane % n
@@ -93,7 +93,6 @@ class Entry:
     """One loaded configuration: its BSDF, parameters and preview scenes."""
 
     def __init__(self, bsdf, keys: dict[str, str]):
-        import mitsuba as mi
         self.bsdf = bsdf
         self.params = mi.traverse(bsdf)
         self.keys = keys                    # parameter name -> traverse key
@@ -120,7 +119,6 @@ class Entry:
         self.values = values
 
     def _update(self, values: dict, before: dict | None) -> None:
-        import drjit as dr
         for name, value in values.items():
             if before is None or before.get(name) != value:
                 key = self.keys[name]
@@ -130,7 +128,6 @@ class Entry:
 
     def scene(self, res: int, mode: str, env, light: float):
         if res not in self.scenes:
-            import mitsuba as mi
             self.scenes[res] = mi.load_dict(preview.scene_dict(
                 self.bsdf, res, backend.integrator(mode), env, light))
         return self.scenes[res]
@@ -140,7 +137,6 @@ class Explorer:
     """The models, the loaded configurations and every computation of the page."""
 
     def __init__(self):
-        import mitsuba as mi
         self.variant = backend.setup()
         self.models: dict[str, dict] = {}
         self.keys: dict[str, dict[str, str]] = {}      # model -> parameter -> traverse key
@@ -157,7 +153,6 @@ class Explorer:
         """Which parameters the model exposes in ``mi.traverse``, under which
         key: a course plugin loaded with its defaults, a built-in with every
         declared parameter given."""
-        import mitsuba as mi
         given = {} if model["source"] == "mi_brdfs" else {
             p["name"]: ([p["default"]] * 3 if p["kind"] == "spectrum" else p["default"])
             for p in model["params"]}
@@ -253,7 +248,6 @@ class Explorer:
         return material, entry, entry.scene(res, material["mode"], self.env, light)
 
     def _passes(self, material, entry, scene, res, spp):
-        import mitsuba as mi
         total, done, index = None, 0, 0
         while done < spp:
             entry.apply(material)      # another request may have set other values meanwhile

@@ -29,7 +29,8 @@ import os
 import sys
 import time
 
-from . import metric, models, targets
+from .. import compare, destinations
+from . import cost, effective, metric, models, report, sweep, targets
 from .task import FULL, QUICK, Settings
 
 __all__ = ["fit", "FULL", "QUICK", "Settings", "metric", "models", "targets"]
@@ -51,9 +52,6 @@ def fit(specs: list[str], out_dir: str, model_names: list[str] | None = None,
     with a worker within ``worker_timeout`` seconds). ``also(folder,
     records)`` may add files to the report. Returns the records (see
     :mod:`.report`)."""
-    from .. import compare, destinations
-    from . import cost, effective, report, sweep
-
     if metric_name not in metric.METRICS:
         raise ValueError(f"--metric {metric_name} is unknown; valid: {', '.join(metric.METRICS)}")
     chosen = models.select(model_names)

@@ -22,7 +22,7 @@ on this machine. It writes nothing.
 
 **Counted** (``ops_ratio``): the Dr.Jit variables one traced ``eval`` and
 one traced ``sample`` create (the bench's count, from Dr.Jit's trace log:
-:func:`..bench.anatomy.variables_created`), relative to the target's: the
+:func:`mi_brdfs.tools.analysis.variables_created`), relative to the target's: the
 same on every run.
 """
 from __future__ import annotations
@@ -36,6 +36,13 @@ import statistics
 import sys
 import time
 
+import mitsuba as mi
+
+from ..analysis import bsdf_call, bsdf_inputs, variables_created
+from ..errors import one_line
+from . import models as M, scene as S, targets as T
+from .task import FULL
+
 OPS_LANES = 1024           # lanes of the traced calls counted (the count does not depend on it)
 REPLY_SECONDS = 600.0      # a worker that does not answer in this long is given up
 
@@ -46,7 +53,6 @@ class CostError(RuntimeError):
 
 def _make(spec):
     """A BSDF from a :class:`.targets.Target` or fitted properties (a dict)."""
-    from . import models as M
     if isinstance(spec, dict):
         return M.load_dict(spec)
     return spec.as_dict() if spec.xml is None else spec.load()
@@ -54,8 +60,6 @@ def _make(spec):
 
 def operations(bsdf) -> int:
     """Dr.Jit variables one traced eval and one traced sample of ``bsdf`` create."""
-    from ..bench.anatomy import variables_created
-    from ..bench.measure import bsdf_call, bsdf_inputs
     x = bsdf_inputs(OPS_LANES)
     for method in ("eval", "sample"):
         bsdf_call(bsdf, method, x)             # the first call may build what later calls reuse
@@ -67,10 +71,6 @@ def _serve(conn, spec, res: int, spp: int) -> None:
     """The worker: load the scene, render once untimed, count operations, then
     time one render per request (its seed) until told to stop (None)."""
     try:
-        import mi_brdfs  # noqa: F401  (LLVM, the variant, the plugins)
-        import mitsuba as mi
-
-        from . import scene as S
         scene = mi.load_dict(S.scene_dict(_make(spec), res, S.COST_VIEW), parallel=False)
         S.render(scene, spp, seed=0)
         ops = operations(scene.shapes()[0].bsdf())
@@ -80,7 +80,6 @@ def _serve(conn, spec, res: int, spp: int) -> None:
             S.render(scene, spp, seed=seed)
             conn.send(("time", time.perf_counter() - start))
     except Exception as error:                 # reported to the parent on one line
-        from ..errors import one_line
         conn.send(("error", one_line(error)))
     finally:
         conn.close()
@@ -134,7 +133,7 @@ class Worker:
 
 def interval(ratios: list[float], confidence: float = 0.90) -> tuple[float, float, float]:
     """(geometric mean, low, high): Student's t interval on the log ratios."""
-    from scipy.stats import t as student
+    from scipy.stats import t as student     # optional: the reports extra
     logs = [math.log(r) for r in ratios]
     mean = statistics.fmean(logs)
     if len(logs) < 2:
@@ -209,8 +208,6 @@ def remeasure(report_dir: str, max_targets: int | None = None, settings=None, sh
               ) -> list[dict]:
     """The fits of a report measured again: per fit, the report's interval and
     the new one."""
-    from . import targets as T
-    from .task import FULL
     settings = settings or FULL
     with open(os.path.join(report_dir, "fits.json")) as f:
         saved = [r for r in json.load(f) if "error" not in r and r.get("cost_ratio") is not None]
@@ -233,7 +230,6 @@ def remeasure(report_dir: str, max_targets: int | None = None, settings=None, sh
 
 
 def main(argv: list[str] | None = None) -> int:
-    from ..errors import one_line
     p = argparse.ArgumentParser(prog="python -m mi_brdfs.tools.fit.cost",
                                 description="Measure a fit report's render costs again and "
                                             "compare the intervals (writes nothing).")

@@ -27,7 +27,14 @@ import math
 
 import numpy as np
 
+import drjit as dr
+import mitsuba as mi
+
 from ..._jit import from_numpy
+from ..analysis import eval_at_viewer
+from .metric import pairs
+from .models import Model
+from .optimise import eval_pairs
 
 ALBEDO_ANGLES = (0.0, 60.0, 85.0)
 ALBEDO_SAMPLES = 1 << 16
@@ -80,8 +87,6 @@ def parameters(plugin: str, p: dict) -> dict:
 
 def albedo(bsdf, angles=ALBEDO_ANGLES, samples: int = ALBEDO_SAMPLES, seed: int = 3) -> list:
     """The directional albedo [angle][channel] (the mean of ``sample``'s weights)."""
-    import drjit as dr
-    import mitsuba as mi
     rng = np.random.default_rng(seed)
     u1 = from_numpy(mi.Float, rng.random(samples, dtype=np.float32))
     u2 = from_numpy(mi.Point2f, rng.random((2, samples), dtype=np.float32))
@@ -102,7 +107,6 @@ def albedo(bsdf, angles=ALBEDO_ANGLES, samples: int = ALBEDO_SAMPLES, seed: int 
 def _at(bsdf, theta_i: float, theta_o: float) -> np.ndarray:
     """eval (RGB) for a viewer at θ_i and a light at θ_o in the plane of
     incidence (θ_o > 0: the mirror side, θ_o < 0: the viewer's side)."""
-    from ..analysis import eval_at_viewer
     t = math.radians(theta_o)
     wo = np.array([[math.sin(t), 0.0, math.cos(t)]])
     return eval_at_viewer(bsdf, theta_i, wo)[0]
@@ -128,7 +132,6 @@ def features(target_bsdf, pairs) -> dict:
     0° and at 80° incidence, :func:`specular_colour`, and the share lost) and
     ``anisotropy`` (the relative change of eval at ``pairs`` when both
     directions turn 90° about the normal)."""
-    from .optimise import eval_pairs
     c0, c80 = (_chroma(specular_colour(target_bsdf, a)) for a in WHITENING_DEG)
     lost = (c0 - c80) / c0 if c0 > 0 else 0.0
     turn = lambda w: np.stack([-w[:, 1], w[:, 0], w[:, 2]], axis=1)
@@ -147,7 +150,6 @@ def conductor_f0(target) -> list[float] | None:
     """F0 per channel of a conductor target given as a shorthand, or None:
     ((η - 1)² + k²)/((η + 1)² + k²) of a ``roughconductor``'s RGB indices
     of refraction, a metallic ``principled``'s base colour."""
-    import mitsuba as mi
     props = dict(target.props)
     if props.get("type") == "principled" and props.get("metallic", 0.0) >= 1.0:
         return list(props.get("base_color", (0.5, 0.5, 0.5)))
@@ -171,7 +173,6 @@ def normal_colour(record: dict) -> list[float] | None:
 
 def target_features(target, settings) -> dict:
     """:func:`features` of a :class:`.targets.Target` on the settings' metric pairs."""
-    from .metric import pairs
     bsdf = target.load()
     try:
         return features(bsdf, pairs(settings.metric, settings.viewers, settings.uniform,
@@ -203,7 +204,6 @@ def extended_models(found: dict) -> list:
     features found: for an anisotropic target, ward and cook_torrance (GGX ×
     Smith, without energy compensation: it has no anisotropic table) with
     alpha_u and alpha_v."""
-    from .models import Model
     if not found["anisotropy"]["present"]:
         return []
     pair = (("alpha_u", 0.1), ("alpha_v", 0.1))

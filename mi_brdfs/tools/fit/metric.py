@@ -58,6 +58,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+import drjit as dr
+
 METRICS = ("cosine", "ngan")
 OBJECTIVES = ("cbrt", "log", "linear")   # what the optimiser minimises (see compress)
 CBRT_FLOOR = 1e-4                   # c(x) = (x + 1e-4)^(1/3) - 1e-4^(1/3): finite slope at 0
@@ -177,7 +179,6 @@ def compress(x, objective: str):
         if objective == "cbrt":
             return np.cbrt(x + CBRT_FLOOR) - CBRT_FLOOR ** (1.0 / 3.0)
         return np.log1p(x / LOG_FLOOR)
-    import drjit as dr
     x = dr.fmax(x, 0.0)
     if objective == "cbrt":
         return dr.cbrt(x + CBRT_FLOOR) - CBRT_FLOOR ** (1.0 / 3.0)

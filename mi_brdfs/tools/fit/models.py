@@ -37,6 +37,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+import drjit as dr
+
+from ...bsdfs import PLUGINS
+
 # Options that make different models (the others are computation choices).
 VARIANTS = {"cook_torrance": ("distribution", "geometry"), "toon": ("specular_model",)}
 EXPONENT_MAX = 1e6        # exponents are searched up to here (a mirror-like lobe)
@@ -59,7 +63,6 @@ class Model:
 
 
 def all_models() -> list[Model]:
-    from ...bsdfs import PLUGINS
     out = []
     for cls in PLUGINS:
         choices = {o.name: o.choices for o in cls.all_options()}
@@ -139,7 +142,6 @@ def logistic(u):
     1 + tanh(u/2) would cancel in float32: an exponent of 10 in [0, 10⁶])."""
     if isinstance(u, (float, int, np.ndarray, np.floating)):
         return 1.0 / (1.0 + np.exp(-np.asarray(u, dtype=np.float64)))
-    import drjit as dr
     return dr.rcp(1.0 + dr.exp(-u))
 
 

@@ -35,8 +35,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+import drjit as dr
+import mitsuba as mi
+
 from ..._jit import from_numpy
-from . import metric as metric_module
+from ...bsdfs import BY_NAME
+from . import metric as metric_module, models as M
 
 RESIDUAL_CAP = 1e3           # a non-finite residual counts as this
 TOLERANCE = 1e-10            # a relative decrease of the objective, or a step in u, this small stops
@@ -59,7 +63,6 @@ class Problem:
 
 def problem(target_bsdf, pairs, objective: str = "cbrt") -> Problem:
     """The target's values at ``pairs`` (non-finite values: the pair left out)."""
-    import mitsuba as mi
     si, wo = surface_at(pairs.wi), from_numpy(mi.Vector3f, pairs.wo.T)
     values = values_of(target_bsdf, si, wo)
     finite = np.isfinite(values).all(axis=1)
@@ -78,8 +81,6 @@ def problem(target_bsdf, pairs, objective: str = "cbrt") -> Problem:
 def surface_at(wi: np.ndarray):
     """A surface interaction per viewer direction (N, 3), local frame, uv at
     the centre (where a texture of the target is read)."""
-    import drjit as dr
-    import mitsuba as mi
     si = dr.zeros(mi.SurfaceInteraction3f, len(wi))
     si.wi = from_numpy(mi.Vector3f, wi.T)
     si.uv = mi.Point2f(0.5, 0.5)
@@ -88,13 +89,11 @@ def surface_at(wi: np.ndarray):
 
 def eval_pairs(bsdf, wi: np.ndarray, wo: np.ndarray) -> np.ndarray:
     """eval at the direction pairs (wi, wo), both (N, 3), as (N, 3) float64."""
-    import mitsuba as mi
     return values_of(bsdf, surface_at(wi), from_numpy(mi.Vector3f, wo.T))
 
 
 def values_of(bsdf, si, wo) -> np.ndarray:
     """eval at the pairs as (N, 3) float64."""
-    import mitsuba as mi
     value = np.array(bsdf.eval(mi.BSDFContext(), si, wo), dtype=np.float64)
     return value.T if value.ndim == 2 else np.repeat(value[:, None], 3, axis=1)
 
@@ -123,10 +122,6 @@ class Evaluator:
     """One instance of the model, its parameters set from coordinates u."""
 
     def __init__(self, model, prob: Problem):
-        import mitsuba as mi
-
-        from ...bsdfs import BY_NAME
-        from . import models as M
         self.model, self.prob = model, prob
         self.cls = BY_NAME[model.plugin]
         probe = mi.load_dict(model.properties())
@@ -140,8 +135,6 @@ class Evaluator:
 
     def set(self, values: dict) -> None:
         """Set parameter values ({name: float or 3 floats}) as opaque variables."""
-        import drjit as dr
-        import mitsuba as mi
         for f in self.free:
             v = values[f.name]
             self.params[f.key] = (mi.Color3f(*(dr.opaque(mi.Float, float(c)) for c in v))
@@ -150,7 +143,6 @@ class Evaluator:
 
     def values(self, u: np.ndarray) -> np.ndarray:
         """eval (N, 3) at the pairs for coordinates u."""
-        from . import models as M
         self.set(M.values(self.free, u))
         return values_of(self.bsdf, self.prob.si, self.prob.wo)
 
@@ -170,8 +162,6 @@ class Evaluator:
     def jacobian(self, u: np.ndarray) -> np.ndarray:
         """d residuals / d u by Dr.Jit's forward-mode AD: one traced eval, then
         one forward pass per coordinate through the recorded graph."""
-        import drjit as dr
-        import mitsuba as mi
         coords = [dr.opaque(mi.Float, float(x)) for x in u]
         for c in coords:
             dr.enable_grad(c)
@@ -230,7 +220,6 @@ class Evaluator:
 
 def candidates(ev: Evaluator, count: int) -> list[dict]:
     """Values of the non-colour parameters to scan (module docstring, stage 1)."""
-    from . import models as M
     shape = [f for f in ev.free if not f.colour]
     defaults = {p.name: p.default for p in ev.cls.PARAMS}
     out = [{f.name: defaults[f.name] for f in shape}]
@@ -249,7 +238,7 @@ def bounded_least_squares(a: np.ndarray, b: np.ndarray, w: np.ndarray, bounds) -
     """argmin Σ w (a x - b)² with lo <= x <= hi, through the normal equations
     (a few unknowns, many rows): ‖Lᵀx - L⁻¹aᵀWb‖² differs from it by a constant,
     L the Cholesky factor of aᵀWa (a small ridge where a column is 0)."""
-    from scipy.optimize import lsq_linear
+    from scipy.optimize import lsq_linear    # optional: the reports extra (not explore's)
     h = np.einsum("ni,n,nj->ij", a, w, a)       # einsum, not BLAS: see gram()
     g = np.einsum("ni,n->i", a, w * b)
     h = h + np.eye(len(h)) * (1e-12 * max(float(np.trace(h)), 1e-300))
@@ -258,9 +247,9 @@ def bounded_least_squares(a: np.ndarray, b: np.ndarray, w: np.ndarray, bounds) -
 
 
 def gram(j: np.ndarray) -> np.ndarray:
-    """jᵀj by einsum: OpenBLAS's threads for a tall product spin on cores
-    shared with Dr.Jit's and other processes' (a fit took 13 s instead of 2 s
-    on this 2-core machine under load)."""
+    """jᵀj by einsum, on one core: OpenBLAS's threads for a tall product spin
+    on cores shared with Dr.Jit's and other processes' (on a loaded 2-core
+    machine a fit then takes 13 s instead of 2 s)."""
     return np.einsum("mi,mj->ij", j, j)
 
 
@@ -269,7 +258,6 @@ def levenberg_marquardt(ev: Evaluator, u0: np.ndarray, evaluations: int):
     (JᵀJ + λ diag(JᵀJ)) δ = -Jᵀr, λ lowered after a step that lowers the
     objective and raised (the step retried) after one that does not
     (Levenberg 1944, Marquardt 1963). Returns (u, residual evaluations)."""
-    from . import models as M
     u = np.array(u0, dtype=np.float64)
     r = ev.residuals(u)
     cost, used, lam = float(np.sum(r * r)), 1, 1e-3
@@ -298,7 +286,6 @@ def levenberg_marquardt(ev: Evaluator, u0: np.ndarray, evaluations: int):
 def fit_model(model, prob: Problem, settings, log=None) -> dict:
     """Fit ``model`` (a :class:`.models.Model`) to ``prob``; returns the fitted
     properties, the BRDF error, the objective and what each start reached."""
-    from . import models as M
     ev = Evaluator(model, prob)
     scanned = []
     for shape in candidates(ev, settings.scan):

@@ -5,6 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 
+import mitsuba as mi
+
+from ...render.tonemap import to_srgb8
 from . import rank
 
 CHANNELS = (("R", "#c0392b"), ("G", "#27ae60"), ("B", "#2e6fd8"))
@@ -12,7 +15,7 @@ SHOWN_IN_SLICES = 3          # the target and this many first-ranked models
 
 
 def _figure(width, height):
-    from matplotlib.figure import Figure      # no pyplot: no global backend change
+    from matplotlib.figure import Figure      # the reports extra; no pyplot: no global backend
     return Figure(figsize=(width, height), dpi=100)
 
 
@@ -82,8 +85,5 @@ def slice_plot(path: str, title: str, target_record: dict, rows: list[dict]) -> 
 
 def views_strip(path: str, images: dict, operator: str) -> None:
     """The views side by side (tone mapped) as one JPEG."""
-    import mitsuba as mi
-
-    from ...render.tonemap import to_srgb8
     strip = np.concatenate([to_srgb8(images[v], operator) for v in images], axis=1)
     mi.Bitmap(np.ascontiguousarray(strip), mi.Bitmap.PixelFormat.RGB).write(path, quality=90)

@@ -18,6 +18,7 @@ error, or cheaper with an equal one.
 from __future__ import annotations
 
 import math
+import re
 
 TIE_FLIP = 0.005           # FLIP differences below this count as equal
 SMALL_FLIP = 0.05          # a best FLIP above this: no model is close; say why
@@ -75,7 +76,6 @@ def front(records: list[dict]) -> list[dict]:
 def target_plugin(spec: str) -> str:
     """The target's plugin name, from its shorthand or from the XML file it names."""
     if spec.lower().endswith(".xml"):
-        import re
         try:
             with open(spec, encoding="utf-8") as f:
                 found = re.search(r'<bsdf[^>]*type="([^"]+)"', f.read())

@@ -39,7 +39,9 @@ import json
 import math
 import os
 
+from .. import pages
 from . import effective, models as M, plots, rank
+from .scene import VIEWS
 from .targets import slug
 
 FIELDS = ("target", "model", "plugin", "rank", "parameters", "image_flip", "image_relmse",
@@ -239,8 +241,6 @@ img.wide { max-width: 100%; }
 def _html(sections: list[str], settings, command: str) -> str:
     """The page (the project's shared builder, :mod:`..pages`): the command,
     how the fits were made and measured, then a section per target."""
-    from .. import pages
-    from .scene import VIEWS
     s = settings
     about = f"""<p><code>{html.escape(command)}</code></p>
 <p>Each course model (hdr mode) fitted to each target on the <b>{s.objective}</b>-compressed

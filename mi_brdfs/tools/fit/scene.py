@@ -25,7 +25,10 @@ import math
 
 import numpy as np
 
+import mitsuba as mi
+
 from ..analysis import camera
+from ..measures import render_waited
 
 FOV = 30.0                 # degrees: the unit sphere seen from 4.5 fills ~85 % of the frame
 DISTANCE = 4.5
@@ -68,7 +71,6 @@ def sky() -> np.ndarray:
 
 def scene_dict(bsdf, res: int, view: str = COST_VIEW) -> dict:
     """The sphere with ``bsdf`` (a dictionary or a loaded BSDF) in ``view``."""
-    import mitsuba as mi
     if view not in VIEWS:
         raise ValueError(f"unknown view {view!r}; valid: {', '.join(VIEWS)}")
     scene = {
@@ -87,7 +89,6 @@ def scene_dict(bsdf, res: int, view: str = COST_VIEW) -> dict:
 
 def render(scene, spp: int, seed: int) -> np.ndarray:
     """A render, evaluated and synchronised (H, W, 3) float64."""
-    from ..measures import render_waited
     return np.array(render_waited(scene, spp, seed), dtype=np.float64)[..., :3]
 
 
@@ -100,7 +101,6 @@ def release() -> None:
 def render_views(make, res: int, spp: int, seed: int = 0) -> dict[str, np.ndarray]:
     """Renders of every view; ``make()`` makes the BSDF afresh for each scene,
     and each scene is released before the next is loaded."""
-    import mitsuba as mi
     images = {}
     for view in VIEWS:
         scene = mi.load_dict(scene_dict(make(), res, view), parallel=False)

@@ -29,7 +29,11 @@ import sys
 
 import numpy as np
 
-from . import effective, metric, rank, targets as T
+from .. import destinations
+from ..errors import one_line
+from . import effective, metric, models as M, rank, sweep, targets as T, trade
+from .optimise import problem
+from .sweep import progress_printer
 from .task import FULL, QUICK
 
 MODELS = ("lambert", "oren_nayar", "phong", "blinn", "ward", "cook_torrance/beckmann/cook_torrance",
@@ -50,7 +54,6 @@ def family(spec: str) -> str:
 def grazing_share(target, settings, objective: str) -> float:
     """The share of E²(0) (the objective's norm) from pairs with a direction
     within 10° of the horizon."""
-    from .optimise import problem
     p = metric.pairs(settings.metric, settings.viewers, settings.uniform, settings.lobe)
     bsdf = target.load()
     prob = problem(bsdf, p, objective)
@@ -67,7 +70,6 @@ def grazing_share(target, settings, objective: str) -> float:
 
 def run_study(quick: bool = False, jobs: int = 2, show=None, targets=None) -> dict:
     """Fits, renders and measures per objective (see the module docstring)."""
-    from . import models as M, sweep, trade
     base = (QUICK if quick else FULL).replace(cost=False)
     chosen = [spec for _, spec in (targets or trade.TARGETS)]
     parsed = T.parse(chosen)
@@ -124,8 +126,6 @@ def table(results: dict) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from .. import destinations
-    from ..errors import one_line
     p = argparse.ArgumentParser(prog="python -m mi_brdfs.tools.fit.study",
                                 description="Measure the fit's objectives (see the module).")
     p.add_argument("-o", "--output", required=True, help="report folder: new, empty, or a previous one")
@@ -134,7 +134,6 @@ def main(argv: list[str] | None = None) -> int:
     args = p.parse_args(argv)
     try:
         destinations.check_report_dir(args.output)
-        from .sweep import progress_printer
         show = progress_printer(p.prog)
         results = run_study(args.quick, args.jobs, show)
         show.close()

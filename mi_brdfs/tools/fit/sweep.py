@@ -32,6 +32,10 @@ import sys
 import time
 from typing import Iterator
 
+import drjit as dr
+
+from ..errors import one_line
+from ..progress import Progress
 from . import models as M, targets as T
 from .task import Settings, fit_and_measure
 
@@ -46,9 +50,7 @@ class SweepError(RuntimeError):
 
 
 def _init_worker(threads: int | None) -> None:
-    import mi_brdfs  # noqa: F401
     if threads:
-        import drjit as dr
         dr.set_thread_count(threads)
 
 
@@ -71,6 +73,7 @@ def local_executor(jobs: int) -> Iterator[cf.Executor]:
 def check_address(address: str) -> None:
     """SweepError unless ``address`` is PROTOCOL://HOST:PORT (or HOST:PORT)
     with a protocol Dask has; nothing is connected."""
+    # optional: the dask extra (connect says so on one line when it is missing)
     from distributed.comm import parse_address
     from distributed.comm.addressing import parse_host_port
     from distributed.comm.registry import backends
@@ -97,7 +100,7 @@ def connect(address: str, worker_timeout: float = WORKER_TIMEOUT):
     line) if Dask is missing, the address malformed, the scheduler out of
     reach or without a worker for ``worker_timeout`` seconds."""
     try:
-        import distributed
+        import distributed          # optional: the dask extra
     except ModuleNotFoundError:
         raise SweepError("--scheduler needs Dask: pip install 'mi_brdfs[dask]'") from None
     check_address(address)
@@ -164,7 +167,6 @@ def dask_sweep(client, address: str, tasks: list, settings: Settings, collect,
 # ----------------------------------------------------------------------------
 
 def _line(error: BaseException) -> str:
-    from ..errors import one_line
     return one_line(error)
 
 
@@ -225,7 +227,6 @@ def run_fits(tasks: list[tuple[T.Target, M.Model]], settings: Settings, jobs: in
 def progress_printer(label: str, stream=None, enabled: bool = True, verbose: bool = False):
     """``show`` for :func:`run_fits` and the cost measurements (a step: one fit,
     or one model's cost): a bar on a terminal, plain lines in a log."""
-    from ..progress import Progress
     bar = Progress(label, stream=stream, enabled=enabled, unit="steps")
     out = stream if stream is not None else sys.stderr
 

@@ -30,6 +30,15 @@ import re
 import xml.etree.ElementTree as ElementTree
 from dataclasses import dataclass
 
+import numpy as np
+
+import mitsuba as mi
+
+from ..errors import one_line
+from .effective import albedo
+from .metric import pairs
+from .optimise import eval_pairs
+
 
 class TargetError(ValueError):
     """A target that cannot be fitted (reported on one line)."""
@@ -46,7 +55,6 @@ class Target:
 
     def load(self):
         """The target as a Mitsuba BSDF (in the active variant)."""
-        import mitsuba as mi
         if self.xml is None:
             return mi.load_dict(self.as_dict())
         if self.folder:
@@ -209,9 +217,6 @@ def _short(value) -> str:
 def check(target: Target) -> None:
     """Raise TargetError unless ``target`` loads as a BSDF that reflects light
     and has no delta lobe. Nothing stays alive afterwards."""
-    import mitsuba as mi
-
-    from ..errors import one_line
     try:
         bsdf = target.load()
     except TargetError:
@@ -238,11 +243,6 @@ def check_values(spec: str, bsdf) -> None:
     """TargetError if ``eval`` is not finite on the quick metric's pairs, or
     if the target reflects no light (0 at every pair, and a directional
     albedo of 0 at 0°, 45° and 80° by its own sampling)."""
-    import numpy as np
-
-    from .effective import albedo
-    from .metric import pairs
-    from .optimise import eval_pairs
     p = pairs("cosine", (8, 4), (8, 8), 16)
     values = eval_pairs(bsdf, p.wi, p.wo)
     bad = int(np.sum(~np.isfinite(values).all(axis=1)))

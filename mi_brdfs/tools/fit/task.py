@@ -16,9 +16,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
+import mitsuba as mi
+
+import mi_brdfs
+
+from .. import compare
+from ..analysis import eval_at_viewer
+from ..errors import one_line
 from ..settings import Settings as SettingsBase
-from . import optimise
-from .optimise import fit_model, problem  # noqa: F401  (used as task.* by tools/explore)
+from . import effective, metric, models as M, optimise, scene
 
 SLICE_ANGLES = (0.0, 30.0, 60.0, 80.0)     # viewer angles of the lobe slices (degrees)
 SLICE_POINTS = 181
@@ -51,7 +57,6 @@ QUICK = Settings(viewers=(8, 4), uniform=(8, 8), lobe=16, res=48,
 def slices(bsdf) -> list[list[list[float]]]:
     """eval per channel in the plane of incidence at each SLICE_ANGLES viewer:
     [angle][channel][point]."""
-    from ..analysis import eval_at_viewer
     theta = np.radians(np.linspace(-89.5, 89.5, SLICE_POINTS))
     wo = np.stack([np.sin(theta), np.zeros_like(theta), np.cos(theta)], axis=1)
     return [eval_at_viewer(bsdf, a, wo).T.tolist() for a in SLICE_ANGLES]
@@ -67,7 +72,6 @@ def fit_and_measure(target, model, settings: Settings, pairs=None) -> dict:
     try:
         return _fit_and_measure(target, model, settings, pairs)
     except Exception as error:                     # reported in the record, not lost
-        from ..errors import one_line
         return {"target": target.spec, "model": model.name, "plugin": model.plugin,
                 "error": one_line(error), "traceback": traceback.format_exc(),
                 "worker": worker_name()}
@@ -79,10 +83,6 @@ def worker_name() -> str:
 
 
 def _fit_and_measure(target, model, settings: Settings, pairs) -> dict:
-    import mi_brdfs  # noqa: F401  (LLVM, the variant, the plugins: in every worker)
-    import mitsuba as mi
-
-    from . import effective, metric, models as M, scene
     if mi.variant() != "llvm_ad_rgb":
         mi.set_variant("llvm_ad_rgb")
         mi_brdfs.register()
@@ -123,8 +123,6 @@ def _fit_and_measure(target, model, settings: Settings, pairs) -> dict:
 def images(target, properties: dict, settings: Settings) -> dict:
     """The fitted model's renders against the target's in every view: FLIP
     and relMSE over the sphere's pixels per view, and their means."""
-    from .. import compare
-    from . import models as M, scene
     mask = scene.sphere_mask(settings.res)
     reference = scene.target_views(target, settings.res, settings.spp, seed=0)
     again = scene.target_views(target, settings.res, settings.spp, seed=1)

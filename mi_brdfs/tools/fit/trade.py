@@ -24,6 +24,11 @@ import os
 import statistics
 import sys
 
+from ..errors import one_line
+from . import effective, fit, rank, targets as T
+from .models import EC, names
+from .sweep import progress_printer
+
 PLASTIC = "diffuse_reflectance=[0.6,0.2,0.1]"
 TARGETS = (          # (label, target)
     ("Au α0.1", "roughconductor:material=Au,alpha=0.1"),
@@ -51,7 +56,6 @@ def fit_materials(out_dir: str, quick: bool = False, jobs: int | None = None,
     """Fit every model (or ``models``) to every target; the report, with
     ``trade.md``, goes to ``out_dir`` (a report folder). ``jobs``: fits at
     once (default: one per core, at most 2; the costs are timed one at a time)."""
-    from . import fit
     labels = dict((spec, label) for label, spec in targets)
 
     def write_table(folder: str, records: list[dict]) -> None:
@@ -82,7 +86,6 @@ def table(records: list[dict], labels: dict[str, str] | None = None) -> str:
     of its interval's ends) and its median operation count (× the target's),
     and on each target its image FLIP and its BRDF error (``0.06 · 0.110``);
     the first-ranked model per target in bold."""
-    from .models import names
     labels = labels or {}
     specs = list(dict.fromkeys(r["target"] for r in records))
     canonical = {name: i for i, name in enumerate(names())}          # the models' own order
@@ -118,7 +121,6 @@ def answers(records: list[dict], labels: dict[str, str] | None = None) -> str:
     first-ranked fit's FLIP is from the best FLIP of any fit, and for a
     conductor the largest channel difference between the first-ranked fit's
     colour at normal incidence and the material's F0 (:func:`checks`)."""
-    from . import rank
     labels = labels or {}
     lines = ["| material | verdict | first-ranked FLIP - best FLIP | conductor: F0 error |",
              "|---|---|---|---|"]
@@ -138,7 +140,6 @@ def checks(records: list[dict]) -> list[tuple[str, float | None, float | None]]:
     any fit (None if every fit failed), and for a conductor the largest
     channel difference between the first-ranked fit's colour at normal
     incidence and the material's F0 (else None)."""
-    from . import effective, rank, targets as T
     out = []
     for spec in dict.fromkeys(r["target"] for r in records):
         order = rank.ranked([r for r in records if r["target"] == spec])
@@ -158,8 +159,6 @@ def compensation_effect(records: list[dict]) -> tuple[int, int, int]:
     """Over the (material, model) pairs fitted both with and without energy
     compensation: in how many the compensated fit's FLIP is worse by more
     than :data:`.rank.TIE_FLIP`, in how many better by more, of how many."""
-    from .models import EC
-    from . import rank
     flip = {(r["target"], r["model"]): rank.quality(r) for r in rank.ok(records)}
     pairs = [(flip[(t, m)], flip[(t, m[:-len(EC)])]) for t, m in flip
              if m.endswith(EC) and (t, m[:-len(EC)]) in flip]
@@ -173,7 +172,6 @@ def summary(records: list[dict], labels: dict[str, str] | None = None) -> str:
     first-ranked model with its image FLIP and render cost (× the material's
     own plugin, 90 % interval), and the best model that costs less beyond the
     timing's noise (:func:`.rank.cheaper_alternative`)."""
-    from . import rank
     labels = labels or {}
     lines = ["| material | first-ranked model | FLIP | cost × (90 %) | cheaper beyond the noise |",
              "|---|---|---|---|---|"]
@@ -193,8 +191,6 @@ def summary(records: list[dict], labels: dict[str, str] | None = None) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     """``python -m mi_brdfs.tools.fit.trade -o DIR [--quick] [-j N] [--materials LABEL ...]``."""
-    from ..errors import one_line
-    from .sweep import progress_printer
     p = argparse.ArgumentParser(prog="python -m mi_brdfs.tools.fit.trade",
                                 description="The trade sweep: every course model fitted to "
                                             "the fixed materials; a fit report with trade.md.")

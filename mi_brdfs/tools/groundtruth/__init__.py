@@ -38,10 +38,11 @@ from .report import (RESIDUAL_BOUND, compensated_albedo, grazing_difference, ref
                      reference_agreement,
                      reference_anisotropic, report_html, report_section, residuals,
                      residuals_anisotropic, slice_difference)
-from .walk import MAX_ORDER, albedo, brdf, directions, table, walk
+from .walk import MAX_ORDER, MU_MIN, WALK_SEED, albedo, brdf, directions, table, walk
 
-__all__ = ["DISTRIBUTIONS", "MAX_ORDER", "RESIDUAL_BOUND", "Alpha", "albedo", "brdf", "d",
-           "d_visible", "directions", "fresnel", "lam", "projected_area", "sample_visible",
-           "single_scattering", "table", "walk", "compensated_albedo", "reference",
-           "reference_agreement", "reference_anisotropic", "report_html", "report_section",
-           "residuals", "residuals_anisotropic", "slice_difference", "grazing_difference"]
+__all__ = ["DISTRIBUTIONS", "MAX_ORDER", "MU_MIN", "WALK_SEED", "RESIDUAL_BOUND", "Alpha",
+           "albedo", "brdf", "d", "d_visible", "directions", "fresnel", "lam", "projected_area",
+           "sample_visible", "single_scattering", "table", "walk", "compensated_albedo",
+           "reference", "reference_agreement", "reference_anisotropic", "report_html",
+           "report_section", "residuals", "residuals_anisotropic", "slice_difference",
+           "grazing_difference"]

@@ -9,6 +9,7 @@ import sys
 
 import numpy as np
 
+from ..destinations import OutputError, check_output_file
 from .microsurface import DISTRIBUTIONS, Alpha
 from .report import (compensated_albedo, grazing_difference, reference, reference_agreement,
                      reference_anisotropic, residuals, residuals_anisotropic, slice_difference)
@@ -132,8 +133,6 @@ def main(argv: list[str] | None = None) -> int:
     """Write the walk's reference albedos (-o), print the residual of every
     compensated cook_torrance D x G against them (--residuals), or what the
     other options name."""
-    from ..destinations import OutputError, check_output_file
-
     parser = _parser()
     args = parser.parse_args(argv)
     log = lambda text: print(text, file=sys.stderr)
@@ -161,8 +160,6 @@ def main(argv: list[str] | None = None) -> int:
             check_output_file(args.output)
         except OutputError as error:
             parser.error(str(error))
-    if args.decomposition or args.slices or args.residuals or args.grazing:
-        import mi_brdfs  # noqa: F401  (variant, plugins)
     if args.decomposition:
         print_decomposition(args.paths)
     if args.slices:

@@ -3,14 +3,19 @@ compensated plugins' residuals, BRDF slices and the validation report's
 section (``mi-brdfs validate``, section 5)."""
 from __future__ import annotations
 
+import html
 import math
 import os
 
 import numpy as np
 
+import drjit as dr
+import mitsuba as mi
+
 from ..._jit import from_numpy
+from ..analysis import eval_at_viewer, plane_of_incidence
 from .microsurface import DISTRIBUTIONS, Alpha
-from .walk import albedo, brdf
+from .walk import MAX_ORDER, albedo, brdf
 
 REFERENCE_ALPHAS = (0.05, 0.1, 0.2, 0.3, 0.45, 0.6, 0.8, 1.0, 1.5, 3.0)
 REFERENCE_F0S = (0.0, 0.1, 0.3, 0.45, 0.6, 0.7, 0.8, 0.9, 0.95, 1.0)
@@ -101,9 +106,6 @@ def compensated_albedo(config: dict, thetas, n: int = 1024, seed: int = 7,
     tangent): 2π times the mean of eval over n² jittered strata of the square
     mapped to the hemisphere by Mitsuba's equal-area (concentric) map, which
     resolves a narrow lobe anywhere alike."""
-    import drjit as dr
-    import mitsuba as mi
-
     rng = np.random.default_rng(seed)
     i, j = (a.ravel() for a in np.meshgrid(np.arange(n), np.arange(n), indexing="ij"))
     u = from_numpy(mi.Point2f, ((i + rng.random(i.size)) / n, (j + rng.random(j.size)) / n))
@@ -210,10 +212,7 @@ def report_section(out: str, quick: bool = False, log=None) -> list[dict]:
     scattering, white m_S, k = 0, at REPORT_CASES) and BRDF slices in the
     plane of incidence (α 0.6, F0 0.6). Writes one figure per D x G and one
     of slices; returns a row per D x G with its largest differences."""
-    from matplotlib.figure import Figure    # no pyplot: no global backend change
-    import mitsuba as mi
-
-    from ..analysis import plane_of_incidence
+    from matplotlib.figure import Figure    # the reports extra; no pyplot: no global backend
     paths = 4000 if quick else 40_000
     thetas = REPORT_THETAS[::2] if quick else REPORT_THETAS
     mus = np.cos(np.radians(thetas))
@@ -292,7 +291,6 @@ def report_section(out: str, quick: bool = False, log=None) -> list[dict]:
 
 def report_html(rows: list[dict]) -> str:
     """The section's HTML (its heading, the table of residuals, the figures)."""
-    import html
     esc = html.escape
     parts = ["<p>The random walk on the Smith microsurface (Heitz et al. 2016; "
              "<code>mi_brdfs/tools/groundtruth/</code>), with Schlick's Fresnel at "
@@ -322,9 +320,6 @@ def slice_difference(distribution: str, geometry: str, alpha: float, theta: floa
     """Relative L1 difference over the plane of incidence between the BRDF of
     the walk (on the nearest Smith microsurface) and compensated /
     single-scattering cook_torrance (white m_S, k = 0): (compensated, single)."""
-    import mitsuba as mi
-
-    from ..analysis import plane_of_incidence
     config = {"type": "cook_torrance", "distribution": distribution, "geometry": geometry,
               "alpha": alpha, "k": 0.0, "f0": f0, "specular_reflectance": 1.0}
     theta_o, comp = plane_of_incidence(mi.load_dict({**config, "energy_compensation": True}),
@@ -356,11 +351,6 @@ def grazing_difference(distribution: str = "beckmann", alpha: float = 0.3, f0: f
     estimation, with its standard error). The lobe, separable in θ_i and θ_o,
     adds the same at every azimuth; the walk's is concentrated near the
     mirror direction."""
-    import mitsuba as mi
-
-    from ..analysis import eval_at_viewer
-    from .walk import MAX_ORDER
-
     def direction(theta, phi):
         t, p = math.radians(theta), math.radians(phi)
         return [math.sin(t) * math.cos(p), math.sin(t) * math.sin(p), math.cos(t)]

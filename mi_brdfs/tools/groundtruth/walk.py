@@ -51,11 +51,15 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ...bsdfs.compensation import azimuth
+from ...bsdfs.microfacet import ALPHA_MIN
 from .microsurface import (Alpha, check, d_visible, dot, fresnel, lam, normalize, pair,
                            sample_visible)
 
 MAX_ORDER = 1000          # bounces after which a path still inside is dropped
 CHUNK = 4096              # paths per chunk (each chunk its own generator)
+MU_MIN = 1e-4             # the cos θ at which a table's μ = 0 node is computed (W and E)
+WALK_SEED = 20160701      # of the walk of the shipped tables
 
 
 class Walked(NamedTuple):
@@ -191,9 +195,6 @@ def table(spec, paths: int | None = None, seed: int | None = None, rows=None,
     is walked where α_u < α_v, or α_u = α_v and φ <= 45°, and filled by the
     quarter turn W(μ, φ, α_u, α_v) = W(μ, 90° - φ, α_v, α_u).
     ``rows``: only these μ nodes (the others are NaN)."""
-    from ...bsdfs.compensation import azimuth
-    from ...bsdfs.microfacet import ALPHA_MIN
-    from ..tables import MU_MIN, WALK_SEED
     mu_axis, f0_axis, inner = spec.axes[0], spec.axes[-1], spec.axes[1:-1]
     mus = np.maximum(mu_axis.nodes(), MU_MIN)
     walked = [np.flatnonzero(a.nodes() <= spec.alpha_max) if a.name.startswith("alpha")

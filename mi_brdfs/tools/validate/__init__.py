@@ -69,13 +69,15 @@ import os
 import time
 from typing import Callable
 
+import mitsuba as mi
+
 from ...bsdfs import cases
-from .. import compare, destinations
-from .verdicts import DOCUMENTED, Known, checks, documented, summary
+from .. import compare, destinations, groundtruth
 from .page import html_page
-from .sections import (ALPHA, FULL, QUICK, Settings, chi2_count, equivalence_section, fresnel_section,
-                       furnace_section, lobe_section, negative_section, sampling_section,
-                       welch_test)
+from .sections import (ALPHA, FULL, QUICK, Settings, chi2_count, equivalence_section,
+                       fresnel_section, furnace_section, lobe_section, negative_section,
+                       sampling_section, welch_test)
+from .verdicts import DOCUMENTED, Known, checks, documented, summary
 
 __all__ = ["validate", "ALPHA", "FULL", "QUICK", "Settings", "DOCUMENTED", "Known", "checks",
            "documented", "summary", "chi2_count", "equivalence_section", "fresnel_section",
@@ -87,10 +89,6 @@ def validate(out_dir: str, quick: bool = False, log: Callable[[str], None] = pri
     """Run every section and write the report to out_dir (a new or empty
     folder, or a previous report: checked before any work). The results
     include ``checks`` and their ``summary`` (counts per status)."""
-    import mitsuba as mi
-
-    import mi_brdfs  # noqa: F401  (plugins registered)
-
     compare.require_reports()
     size = QUICK if quick else FULL
     furnace = {name: cases.report_furnace(name)[:2 if quick else None] for name in cases.ALL}
@@ -112,7 +110,6 @@ def validate(out_dir: str, quick: bool = False, log: Callable[[str], None] = pri
         log("lobes ...")
         results["lobes"] = lobe_section(tmp, cases.lobe_configs())
         log("ground truth ...")
-        from .. import groundtruth
         results["groundtruth"] = groundtruth.report_section(tmp, quick)
         results["checks"] = checks(results)
         results["summary"] = summary(results["checks"])

@@ -3,9 +3,9 @@ from __future__ import annotations
 
 import html
 
-from .. import pages
-from .verdicts import LABELS, STATUSES
+from .. import groundtruth, pages
 from .sections import ALPHA, PRESERVED_UP_TO
+from .verdicts import LABELS, STATUSES
 
 # beside the shared page's: the first two columns are names, left-aligned
 CSS = """
@@ -162,7 +162,6 @@ def lobes_html(results: dict) -> str:
 
 
 def groundtruth_html(results: dict) -> str:
-    from .. import groundtruth      # (needs scipy: the reports extra)
     return ("<h2>5. Ground truth: the random walk</h2>"
             + groundtruth.report_html(results.get("groundtruth", [])))
 

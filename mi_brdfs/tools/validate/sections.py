@@ -8,8 +8,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+import drjit as dr
+import mitsuba as mi
+
 from ..._jit import from_numpy
-from ...bsdfs import cases
+from ...bsdfs import BY_NAME, cases
 from .. import analysis, compare, settings
 from ..chi2 import ConvergedChiSquareTest
 
@@ -84,7 +87,6 @@ def sphere_scene(bsdf: dict, res: int) -> dict:
 def independent_renders(scene_dict: dict, count: int, spp: int, seed0: int = 0) -> np.ndarray:
     """(count, H, W, 3): ``count`` renders with seeds seed0, seed0 + 1, ...
     (kept apart, for the per-pixel test; not averaged as render passes are)."""
-    import mitsuba as mi
     scene = mi.load_dict(scene_dict)
     return np.stack([np.array(mi.render(scene, spp=spp, seed=seed0 + i))[..., :3]
                      for i in range(count)]).astype(np.float64)
@@ -92,7 +94,7 @@ def independent_renders(scene_dict: dict, count: int, spp: int, seed0: int = 0) 
 
 def welch_test(a: np.ndarray, b: np.ndarray) -> dict:
     """Per-pixel Welch t-test of the pass means (channel mean), Bonferroni over pixels."""
-    from scipy import stats
+    from scipy import stats                 # optional: the reports extra
 
     a, b = a.mean(axis=-1), b.mean(axis=-1)          # (passes, H, W)
     n = a.shape[0]
@@ -156,9 +158,6 @@ FLOAT_PRECISION = 1e-5            # largest |difference| allowed, relative to th
 def fresnel_section(seed: int = 5) -> list[dict]:
     """cook_torrance × F_dielectric/F_Schlick against roughplastic, at BSDF
     level: eval at random direction pairs, the Fresnel ratio at cos = wi·h."""
-    import drjit as dr
-    import mitsuba as mi
-
     rng = np.random.default_rng(seed)
 
     def hemisphere(n):
@@ -202,7 +201,6 @@ def rendered_albedo(config: dict, angles, size: Settings) -> np.ndarray:
     """E(theta_i) by rendering: a large plane with the BSDF inside a uniform white
     environment, seen by an orthographic camera at theta_i (every pixel sees
     the surface at exactly that angle), with direct lighting only."""
-    import mitsuba as mi
     T = mi.ScalarTransform4f
     out = []
     for a in angles:
@@ -236,7 +234,6 @@ PRESERVED_TOL = 0.01
 def furnace_curves(config: dict) -> list[tuple[str, dict]]:
     """(label, configuration) of each furnace curve: both modes, and hdr with
     energy compensation where the model has it."""
-    from ...bsdfs import BY_NAME
     curves = [(mode, {**config, "mode": mode}) for mode in MODES]
     if BY_NAME[config["type"]].compensable:
         curves.append((COMPENSATED, {**config, "mode": "hdr", "energy_compensation": True}))
@@ -244,8 +241,7 @@ def furnace_curves(config: dict) -> list[tuple[str, dict]]:
 
 
 def furnace_section(size: Settings, out: str, models: dict) -> list[dict]:
-    from matplotlib.figure import Figure    # no pyplot: no global backend change
-    import mitsuba as mi
+    from matplotlib.figure import Figure    # the reports extra; no pyplot: no global backend
 
     rows = []
     for name, configs in models.items():
@@ -290,7 +286,6 @@ def furnace_section(size: Settings, out: str, models: dict) -> list[dict]:
 
 def viewer(theta: float, phi: float = 0.0):
     """The local direction to a viewer at (theta, phi), in degrees."""
-    import mitsuba as mi
     t, p = math.radians(theta), math.radians(phi)
     return mi.ScalarVector3f(math.sin(t) * math.cos(p), math.sin(t) * math.sin(p), math.cos(t))
 
@@ -299,7 +294,6 @@ def chi2_test(sampled: dict, pdf: dict, theta: float, phi: float, res: int,
               samples: int) -> ConvergedChiSquareTest:
     """The χ² test of ``sampled``'s sampler against ``pdf``'s density, for a
     viewer at (theta, phi), the density integrated until it converges."""
-    import mitsuba as mi
     sample_func, _ = mi.chi2.BSDFAdapter(sampled["type"], sampled, wi=viewer(theta, phi))
     _, pdf_func = mi.chi2.BSDFAdapter(pdf["type"], pdf, wi=viewer(theta, phi))
     return ConvergedChiSquareTest(domain=mi.chi2.SphericalDomain(), pdf_func=pdf_func,
@@ -316,9 +310,6 @@ def sampling_section(size: Settings, models: dict, count: int | None = None) -> 
     """χ² and sample weights of every test of ``models`` ({model: [(label,
     cases.Chi2)]}), at the case's resolution and viewer azimuth.
     ``count``: the number of χ² tests the significance is corrected for."""
-    import drjit as dr
-    import mitsuba as mi
-
     count = count or chi2_count(models, {})
     rows = []
     for name, tests in models.items():
@@ -365,8 +356,7 @@ def negative_section(size: Settings, negatives: dict, count: int) -> list[dict]:
 # ----------------------------------------------------------------------------
 
 def lobe_section(out: str, models: dict, angles=(0, 30, 60, 80)) -> list[dict]:
-    from matplotlib.figure import Figure    # no pyplot: no global backend change
-    import mitsuba as mi
+    from matplotlib.figure import Figure    # the reports extra; no pyplot: no global backend
 
     rows = []
     for name, base in models.items():

@@ -4,16 +4,20 @@
   :mod:`.toon` (diffuse), :mod:`.phong`, :mod:`.blinn`, :mod:`.ward`,
   :mod:`.cook_torrance` (specular), and beside them :mod:`.ashikhmin_shirley`
   (anisotropic Phong, Ashikhmin & Shirley 2000); each declares what runs of it
-  (:mod:`.cases`). What a model supplies: :mod:`.model`;
-- what every plugin does alike: :mod:`.base` (the ``mi.BSDF`` glue),
-  :mod:`.params` (declaring, reading and checking parameters), :mod:`.lobes`
-  (the lobes' algebra and mixture), :mod:`.compensation` (the
+  (:mod:`.cases`);
+- what every plugin does alike: :mod:`.base` (the ``mi.BSDF`` glue: loading,
+  parameters, ``traverse``, the lobes a scene requires, and the load-time
+  hooks a model implements), :mod:`.mixture` (every traced step of the BSDF
+  interface over the lobes, and the traced hooks), :mod:`.params` (declaring,
+  reading and checking parameters), :mod:`.compensation` (the
   multiple-scattering lobe and its tables, shipped in ``data/``);
-- the shared formulas: :mod:`.microfacet` (D, F, G), :mod:`.powercos`
-  (power-cosine lobes in float32), :mod:`.grid` (tabulated functions).
+- the shared formulas: :mod:`.microfacet` (the distribution: D, G, sampling),
+  :mod:`.fresnel` (F), :mod:`.powercos` (power-cosine lobes in float32),
+  :mod:`.grid` (tabulated functions).
 """
 from __future__ import annotations
 
+from . import cases
 from .ashikhmin_shirley import AshikhminShirley
 from .base import register_plugin
 from .blinn import Blinn
@@ -31,6 +35,7 @@ from .ward import Ward
 # the documentation (tests/bsdfs/test_registry.py says where a model is missing).
 PLUGINS = (Lambert, OrenNayar, Toon, Phong, Blinn, Ward, CookTorrance, AshikhminShirley)
 BY_NAME = {cls.name: cls for cls in PLUGINS}     # plugin name -> class
+cases.use(BY_NAME)                               # every model's cases (cases.ALL, cases.of)
 
 __all__ = ["PLUGINS", "BY_NAME", *(cls.__name__ for cls in PLUGINS)]
 

@@ -91,13 +91,16 @@ at its defaults, then fits the anisotropy too.
 """
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import drjit as dr
 import mitsuba as mi
 
-from . import microfacet as mf, powercos
-from .base import BRDF
+from . import fresnel, powercos
+from .base import BRDF, Effective, rgb_list, schlick
 from .cases import THETAS_LOW, Cases, Chi2, Furnace, Pictures, rgb
-from .lobes import Scaled, mean
+from .microfacet import half_vector
+from .mixture import Float, Scaled, Spectrum, mean
 from .params import Param
 
 MAX_EXPONENT = 1e8    # as phong's: the lobe is still 1000x the float32 direction spacing
@@ -137,12 +140,12 @@ def normalisation(n_u, n_v):
     return dr.sqrt(n_u + 1.0) * dr.sqrt(n_v + 1.0)
 
 
-def specular_shape(wi, wo, n_u, n_v):
+def eval_specular(wi, wo, n_u, n_v):
     """rho_s / F · (d·n), the eval value of the specular lobe per unit Fresnel
-    (the same in both modes), and k·h (for F).
+    (the same in both modes), and k·h (Fresnel's cosine).
 
     1/max(k_1·n, k_2·n) · (k_2·n) is written (d·n)/max(...) <= 1."""
-    h = mf.half_vector(wi, wo)
+    h = half_vector(wi, wo)
     k_h = dr.fmax(dr.dot(wo, h), KH_MIN)
     cos_i, cos_o = mi.Frame3f.cos_theta(wi), mi.Frame3f.cos_theta(wo)
     up = (cos_i > 0.0) & (cos_o > 0.0)
@@ -152,12 +155,7 @@ def specular_shape(wi, wo, n_u, n_v):
     return shape, k_h
 
 
-def fresnel(r_s, k_h):
-    """Schlick's F(k·h) = R_s + (1 - R_s)(1 - k·h)^5 (per colour channel)."""
-    return r_s + (1.0 - r_s) * fifth(1.0 - dr.fmin(k_h, 1.0))
-
-
-def diffuse_shape(cos_i, cos_o, mode: str):
+def eval_diffuse(cos_i, cos_o, mode: str):
     """rho_d / (R_d (1 - R_s)) · (d·n): 28/(23 pi) · (1 - (1 - k_1·n/2)^5)
     · (1 - (1 - k_2·n/2)^5) · (d·n), times pi in scanline mode; 0 below the surface."""
     up = (cos_i > 0.0) & (cos_o > 0.0)
@@ -190,14 +188,14 @@ def pdf_half_vector(h, n_u, n_v):
     return normalisation(n_u, n_v) * dr.inv_two_pi * half_vector_power(h, n_u, n_v)
 
 
-def sample_lobe(wi, sample2, n_u, n_v):
+def sample_specular(wi, sample2, n_u, n_v):
     """Sample h, then reflect the viewer about it."""
     return mi.reflect(wi, sample_half_vector(sample2, n_u, n_v))
 
 
-def pdf_lobe(wi, wo, n_u, n_v):
-    """Density of sample_lobe at wo: p_h(h) / (4 k·h), 0 where k·h <= 0."""
-    h = mf.half_vector(wi, wo)
+def pdf_specular(wi, wo, n_u, n_v):
+    """The density of :func:`sample_specular` at wo: p_h(h) / (4 k·h), 0 where k·h <= 0."""
+    h = half_vector(wi, wo)
     k_h = dr.dot(wo, h)
     p = pdf_half_vector(h, n_u, n_v) / (4.0 * dr.fmax(k_h, KH_MIN))
     return dr.select(k_h > 0.0, p, 0.0)
@@ -206,6 +204,14 @@ def pdf_lobe(wi, wo, n_u, n_v):
 # ----------------------------------------------------------------------------
 #  The plugin
 # ----------------------------------------------------------------------------
+
+class Inputs(NamedTuple):
+    """What one call evaluates at its point."""
+    colour_s: Spectrum              # R_s, Schlick's F0 (the specular lobe is always present)
+    transmitted: Spectrum | None    # R_d (1 - R_s), where the diffuse lobe is present
+    n_u: Float                      # the exponent along u
+    n_v: Float                      # ... and along v
+
 
 class AshikhminShirley(BRDF):
     __doc__ = __doc__                  # the module's documentation, for help()
@@ -220,9 +226,11 @@ class AshikhminShirley(BRDF):
                   "The diffuse term is weighted by 1 - R_s, so R_s is at most 1. R_s = 0 "
                   "keeps a specular lobe: F = (1 - k·h)^5 towards grazing."),
         Param("exponent_u", 100.0, 0.0, MAX_EXPONENT, kind="scalar", role="shape",
+              discontinuous=True,
               doc="n_u, the Phong exponent along u (the shading frame's s axis, local x, "
                   "along dp/du): the larger, the narrower the highlight along u."),
         Param("exponent_v", 100.0, 0.0, MAX_EXPONENT, kind="scalar", role="shape",
+              discontinuous=True,
               doc="n_v, the Phong exponent along v (local y). n_u = n_v: an isotropic "
                   "lobe."),
     )
@@ -231,23 +239,22 @@ class AshikhminShirley(BRDF):
     def has_diffuse(self) -> bool:
         return not self.off("diffuse_reflectance")
 
-    def has_glossy(self) -> bool:
+    def has_specular(self) -> bool:
         return True                    # R_s = 0 still reflects (1 - k·h)^5 towards grazing
 
-    def eval_textures(self, si, active):
-        inp = self.colours(si, active, n_u=self.m_exponent_u.eval_1(si, active),
-                           n_v=self.m_exponent_v.eval_1(si, active))
-        if self.state.plan.lobes.diffuse:
-            inp.transmitted = inp.colour_d * (1.0 - inp.colour_s)     # R_d (1 - R_s)
-        return inp
+    def eval_textures(self, si, active) -> Inputs:
+        r_s = self.m_specular_reflectance.eval(si, active)
+        r_d = self.colour("diffuse_reflectance", "diffuse", si, active)
+        return Inputs(r_s, None if r_d is None else r_d * (1.0 - r_s),
+                      self.m_exponent_u.eval_1(si, active), self.m_exponent_v.eval_1(si, active))
 
-    def f_diffuse(self, inp, si, wo):
+    def eval_diffuse(self, inp, si, wo):
         cos_i, cos_o = mi.Frame3f.cos_theta(si.wi), mi.Frame3f.cos_theta(wo)
-        return Scaled(inp.transmitted, diffuse_shape(cos_i, cos_o, self.options.mode))
+        return Scaled(inp.transmitted, eval_diffuse(cos_i, cos_o, self.options.mode))
 
-    def f_glossy(self, inp, si, wo):
-        shape, k_h = specular_shape(si.wi, wo, inp.n_u, inp.n_v)
-        return Scaled(fresnel(inp.colour_s, k_h), shape)
+    def eval_specular(self, inp, si, wo):
+        shape, k_h = eval_specular(si.wi, wo, inp.n_u, inp.n_v)
+        return Scaled(fresnel.schlick(inp.colour_s, k_h), shape)
 
     def selection_weights(self, inp, si):
         lobes = self.state.plan.lobes
@@ -258,15 +265,22 @@ class AshikhminShirley(BRDF):
                 w_d = w_d * dr.pi
         else:
             w_d = mi.Float(0.0)
-        w_s = mean(fresnel(inp.colour_s, cos_i)) if lobes.glossy else mi.Float(0.0)
+        w_s = mean(fresnel.schlick(inp.colour_s, cos_i)) if lobes.specular else mi.Float(0.0)
         return w_d, w_s
 
-    # --- glossy sampling ----------------------------------------------------------
-    def sample_glossy(self, inp, si, sample2):
-        return sample_lobe(si.wi, sample2, inp.n_u, inp.n_v)
+    @classmethod
+    def effective(cls, values: dict, cos_theta: float) -> Effective:
+        """R_d (1 - R_s), and Schlick's F of R_s at θ."""
+        r_s = rgb_list(values["specular_reflectance"])
+        r_d = rgb_list(values["diffuse_reflectance"])
+        return Effective([d * (1.0 - s) for d, s in zip(r_d, r_s)], schlick(r_s, cos_theta))
 
-    def pdf_glossy(self, inp, si, wo):
-        return pdf_lobe(si.wi, wo, inp.n_u, inp.n_v)
+    # --- specular sampling --------------------------------------------------------
+    def sample_specular(self, inp, si, sample2):
+        return sample_specular(si.wi, sample2, inp.n_u, inp.n_v)
+
+    def pdf_specular(self, inp, si, wo):
+        return pdf_specular(si.wi, wo, inp.n_u, inp.n_v)
 
     # --- what runs of it: the tests, the validation report, the bench, the pictures ---
     @classmethod
@@ -332,6 +346,10 @@ class AshikhminShirley(BRDF):
             pictures=Pictures("exponent_v", (10.0, 100.0, 1000.0),
                               {"exponent_u": 1000.0, "diffuse_reflectance": 0.3,
                                "specular_reflectance": 0.2}),
+            fits=[{"diffuse_reflectance": [0.5, 0.3, 0.2], "specular_reflectance": [0.3, 0.3, 0.25],
+                   "exponent_u": 40.0, "exponent_v": 200.0},
+                  {"diffuse_reflectance": [0.1, 0.3, 0.5], "specular_reflectance": [0.5, 0.4, 0.2],
+                   "exponent_u": 300.0, "exponent_v": 30.0}],
             mitsuba=("roughplastic", "roughconductor"),
             checked="its sampler's closed-form weight; its diffuse term's closed-form albedo; "
                     "white furnace",

@@ -1,13 +1,15 @@
 """The ``mi.BSDF`` glue every mi_brdfs plugin shares, written once.
 
-A model subclasses :class:`BRDF` and supplies what :mod:`.model` lists (its
-parameters, its lobes' formulas and samplers, its cases). This module does the
-rest, alike for every model:
+A model subclasses :class:`BRDF` and supplies its declarations and hooks
+(its parameters, its lobes' formulas and samplers, its cases; each hook is
+documented on its default: :class:`BRDF` and :class:`.mixture.Mixture`).
+This module does the rest, alike for every model:
 
 - **loading**: every option and parameter read and checked by
   :class:`.params.Reader` (one line naming the plugin, the parameter, the
   value and the valid range), the same checks again at ``params.update()``;
-  ``traverse`` exposes every parameter as differentiable;
+  ``traverse`` exposes every parameter as differentiable (and a roughness as
+  discontinuous too, as Mitsuba does);
 - **modes**: ``"scanline"`` clamps each lobe per colour channel to [0, 1]
   (the lecture's scan-line BRDFs), ``"hdr"`` keeps them unclamped;
 - **model only what a scene requires**: a lobe whose colour or weight is the
@@ -36,14 +38,15 @@ replay of a frozen render with that state as attributes, 16.4 ms without).
 """
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import drjit as dr
 import mitsuba as mi
 import numpy as np
 
 from .._binding import bind, create
 from .compensation import Compensation
-from .lobes import ALL, ANY, Lobes, Plan
-from .mixture import Mixture
+from .mixture import Lobes, Mixture, Plan
 from .params import (DeclarationError, Option, Param, Reader, check_value, grad_enabled,
                      value_range)
 
@@ -83,17 +86,26 @@ class State:
         self.switches: dict[str, float] = {}  # plain numbers folded while 0 or 1
         self.compensation: Compensation | None = None   # the multiple-scattering lobe
         self.plan: Plan | None = None         # what a call traces
-        self.index = {"diffuse": 0, "glossy": 0}   # each lobe's component index
+        self.index = {"diffuse": 0, "specular": 0}   # each lobe's component index
 
 
 class BRDF(Mixture):
     """Base of every mi_brdfs plugin (plain Python; bound onto a variant's
-    ``mi.BSDF`` by :func:`register_plugin`). The hooks a model implements, and
-    their defaults here: :mod:`.model`."""
+    ``mi.BSDF`` by :func:`register_plugin`).
 
-    name = "brdf"                     # the registered plugin name
-    OPTIONS: tuple[Option, ...] = ()
-    PARAMS: tuple[Param, ...] = ()
+    A model is one module: its pure formulas, then a subclass of this class
+    that declares what it is and implements the hooks it needs, each
+    documented on its default: the declarations below and the load-time hooks
+    here (run when the plugin is loaded and again at ``params.update()``), the
+    traced hooks in :class:`.mixture.Mixture` (run inside ``sample``,
+    ``eval``, ``pdf``, ``eval_pdf``). This class and its parent do the rest:
+    reading and checking the parameters, the two modes, which lobes a scene
+    requires, the mixture of the lobes, energy compensation."""
+
+    name = "brdf"                     # the plugin's name in scene files (<bsdf type="NAME">)
+    OPTIONS: tuple[Option, ...] = ()  # its choices (the base adds mode, sampling and,
+    #                                   with compensation(), energy_compensation)
+    PARAMS: tuple[Param, ...] = ()    # its parameters: colours, weights and shapes
     reciprocal = True                 # hdr mode: f(wi, wo) = f(wo, wi) (the tests check it)
     compensable = False               # derived: the model defines compensation()
 
@@ -132,17 +144,31 @@ class BRDF(Mixture):
 
     @classmethod
     def cases(cls):
-        raise NotImplementedError(f"{cls.__name__} declares no cases() (see bsdfs/model.py)")
+        """The configurations the tests, the validation report, the bench, the
+        fit and the documentation run (:mod:`.cases`). Every model declares them."""
+        raise NotImplementedError(f"{cls.__name__} declares no cases()")
+
+    @classmethod
+    def effective(cls, values: dict, cos_theta: float) -> Effective:
+        """What parameter values mean to a user looking at the surface (the fit
+        reports it): the diffuse colour, the specular colour seen at incidence
+        cos θ (the highlight's colour), each an RGB list or None where the
+        model has no such lobe, and notes on parameters that have no effect.
+        ``values``: plain numbers and RGB lists by parameter name. Default:
+        ``reflectance`` or ``diffuse_reflectance`` as the diffuse colour,
+        ``specular_reflectance`` as the specular one at every angle."""
+        diffuse = values.get("diffuse_reflectance", values.get("reflectance"))
+        specular = values.get("specular_reflectance")
+        return Effective(None if diffuse is None else rgb_list(diffuse),
+                         None if specular is None else rgb_list(specular))
 
     @classmethod
     def tables(cls) -> list:
+        """The albedo tables its compensation reads (built offline by ``python -m
+        mi_brdfs.tools.tables``). Default: none."""
         return []
 
     # --- parameters ---------------------------------------------------------------
-    def read(self, reader: Reader) -> None:
-        for p in self.PARAMS:
-            self.read_param(reader, p)
-
     def read_param(self, reader: Reader, p: Param):
         """Read ``p`` into ``self.m_<name>`` and remember it as present."""
         value = reader.read(p)
@@ -157,12 +183,16 @@ class BRDF(Mixture):
         return value
 
     def traverse(self, cb):
-        for name in self.state.params:
+        for name, p in self.state.params.items():
+            # a roughness moves the sampler: differentiable and discontinuous, as
+            # Mitsuba flags roughconductor's alpha
+            flags = mi.ParamFlags.Differentiable | (mi.ParamFlags.Discontinuous if p.discontinuous
+                                                     else mi.ParamFlags(0))
             box = self.state.boxes.get(name)
             if box is None:
-                cb.put(name, getattr(self, "m_" + name), mi.ParamFlags.Differentiable)
+                cb.put(name, getattr(self, "m_" + name), flags)
             else:
-                cb.put(name, box.pointer, mi.ParamFlags.Differentiable, box.type)
+                cb.put(name, box.pointer, flags, box.type)
 
     def parameters_changed(self, keys=[]):
         """Check the changed parameters as at load time, mark them live, and
@@ -205,45 +235,39 @@ class BRDF(Mixture):
         value = self.state.switches.get(name)
         return getattr(self, "m_" + name) if value is None else value
 
-    def colours(self, si, active, **shape):
-        """``eval_textures`` of a model with ``diffuse_reflectance`` and
-        ``specular_reflectance``: its evaluated shape parameters (``shape``) and
-        the lecture's m_D, m_S for the lobes present (``colour_d``, ``colour_s``)."""
-        inp = Inputs(**shape)
-        lobes = self.state.plan.lobes
-        if lobes.diffuse:
-            inp.colour_d = self.m_diffuse_reflectance.eval(si, active)
-        if lobes.glossy:
-            inp.colour_s = self.m_specular_reflectance.eval(si, active)
-        return inp
+    # --- the model's load-time hooks (its traced ones: mixture.Mixture) ------------
+    def read(self, reader: Reader) -> None:
+        """Read every parameter: ``self.read_param(reader, p)`` per Param (the
+        default), with a model's own rules where parameters exclude each other
+        or an option changes a range."""
+        for p in self.PARAMS:
+            self.read_param(reader, p)
 
-    # --- the model's hooks: defaults (see bsdfs/model.py) -------------------------
     def has_diffuse(self) -> bool:
+        """Whether the diffuse lobe can matter: use ``self.off(name)`` (a
+        parameter that is the constant that switches the lobe off and cannot
+        change). Default False."""
         return False
 
-    def has_glossy(self) -> bool:
+    def has_specular(self) -> bool:
+        """Whether the specular lobe (the model's highlight) can matter. Default False."""
         return False
 
     def compensation(self) -> Compensation | None:
+        """The multiple-scattering lobe of energy compensation (:mod:`.compensation`):
+        a model that defines this hook has the option ``energy_compensation``."""
         return None
 
     def diffuse_sampling(self) -> str:
+        """``"cosine"`` (the default: a lobe carrying cos θ_o) or ``"uniform"``
+        (a lobe constant over the hemisphere, whose cosine-sampled weights
+        1/cos θ_o would have infinite variance)."""
         return "cosine"
 
     def lit_from_behind(self) -> bool:
+        """True if ``eval`` must see lights below the surface (the lobes then
+        zero what must be zero); default False: the base zeroes them."""
         return False
-
-    def eval_textures(self, si, active):
-        return Inputs()
-
-    def lobe_weights(self, inp):
-        return 1.0, 1.0
-
-    def selection_weights(self, inp, si):
-        return mi.Float(1.0), mi.Float(1.0)
-
-    def f_pdf_glossy(self, inp, si, wo):
-        return self.f_glossy(inp, si, wo), self.pdf_glossy(inp, si, wo)
 
     # --- lobes and flags ----------------------------------------------------------
     def update_lobes(self) -> None:
@@ -251,24 +275,24 @@ class BRDF(Mixture):
         state, options = self.state, self.options
         state.switches = {p.name: v for p in state.params.values() if p.kind == "float"
                           for v in (0.0, 1.0) if self.off(p.name, v)}
-        diffuse, glossy = self.has_diffuse(), self.has_glossy()
+        diffuse, specular = self.has_diffuse(), self.has_specular()
         state.compensation = None
         if getattr(options, "energy_compensation", False):
             ms = self.compensation()
-            if diffuse if ms.lobe == "diffuse" else glossy:
+            if diffuse if ms.lobe == "diffuse" else specular:
                 state.compensation = ms
         components = []
         if diffuse:
             components.append(mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide)
-        if glossy:
+        if specular:
             components.append(mi.BSDFFlags.GlossyReflection | mi.BSDFFlags.FrontSide)
         flags = mi.BSDFFlags.Empty
         for c in components:
             flags |= c
         self.m_components, self.m_flags = components, flags
-        state.index = {"diffuse": 0, "glossy": len(components) - 1}
+        state.index = {"diffuse": 0, "specular": len(components) - 1}
         # the plan first: the compensation's preparation evaluates the textures
-        state.plan = Plan(Lobes(diffuse, glossy, state.compensation is not None),
+        state.plan = Plan(Lobes(diffuse, specular, state.compensation is not None),
                           options.mode == "scanline", options.sampling == "cosine",
                           self.diffuse_sampling() == "uniform", self.lit_from_behind())
         if state.compensation is not None:
@@ -281,27 +305,6 @@ class BRDF(Mixture):
         ms = self.state.compensation
         return (self.state.plan, tuple(sorted(self.state.switches.items())),
                 ms.key() if ms is not None else ())
-
-    def enabled(self, ctx) -> Lobes:
-        """The lobes that exist and that ctx asks for."""
-        lobes = self.state.plan.lobes
-        if ctx.type_mask == ALL and ctx.component == ANY:         # (the usual context)
-            return lobes
-        index = self.state.index
-        d = lobes.diffuse and ctx.is_enabled(mi.BSDFFlags.DiffuseReflection, index["diffuse"])
-        g = lobes.glossy and ctx.is_enabled(mi.BSDFFlags.GlossyReflection, index["glossy"])
-        ms = self.state.compensation
-        return Lobes(d, g, lobes.multiple and (g if ms.lobe == "glossy" else d))
-
-    def inputs(self, si, active):
-        """Everything a call needs at ``si``, each texture evaluated once: the
-        model's inputs and, with compensation, (g(ω_i), G_avg, C)."""
-        inp = self.eval_textures(si, active)
-        ms = self.state.compensation
-        if ms is None or not self.state.plan.lobes.multiple:
-            return inp, None
-        return inp, (ms.albedo(inp, si.wi, self.m_ms), ms.average(inp, self.m_ms),
-                     ms.colour(inp))
 
     # --- attributes, as Mitsuba's BSDF base class answers them ----------------------
     # A texture parameter is looked up (eval, eval_1, eval_3); a plain number is an
@@ -344,11 +347,24 @@ class BRDF(Mixture):
         return fields
 
 
-class Inputs:
-    """A model's evaluated textures at one call (its own fields: the base reads none)."""
+class Effective(NamedTuple):
+    """What a model's parameter values look like (:meth:`BRDF.effective`)."""
+    diffuse: list[float] | None
+    specular: list[float] | None
+    notes: tuple[str, ...] = ()
 
-    def __init__(self, **fields):
-        self.__dict__.update(fields)
+
+def rgb_list(value, scale: float = 1.0) -> list[float]:
+    """A plain number or an RGB triple as an RGB list, times ``scale``."""
+    channels = value if isinstance(value, (list, tuple)) else (value, value, value)
+    return [float(c) * scale for c in channels]
+
+
+def schlick(f0, c: float):
+    """Schlick's F0 + (1 - F0)(1 - c)^5 of plain numbers (a number or a list)."""
+    if isinstance(f0, (list, tuple)):
+        return [schlick(x, c) for x in f0]
+    return f0 + (1.0 - f0) * (1.0 - c) ** 5
 
 
 class Box:

@@ -67,7 +67,8 @@ import drjit as dr
 import mitsuba as mi
 
 from . import microfacet as mf, powercos
-from .phong import Phong
+from .cases import Cases
+from .phong import Formulas, Phong
 
 
 # ----------------------------------------------------------------------------
@@ -86,16 +87,15 @@ def normalisation(gamma):
     return (gamma + 2.0) * (gamma + 4.0) / (8.0 * dr.pi * (dr.exp2(-0.5 * gamma) + gamma))
 
 
-def specular_scanline(wi, wo, gamma):
-    """The lecture's clamp(n·h)^gamma."""
+def eval_specular(wi, wo, gamma, mode: str):
+    """The specular lobe at wo: the lecture's clamp(n·h)^gamma (scanline), or
+    N(gamma) · clamp(n·h)^gamma · cos(theta_o) (hdr)."""
     c, versin = cos_h(wi, wo)
-    return powercos.pow_cos(c, versin, gamma)
-
-
-def specular_hdr(wi, wo, gamma):
-    """N(gamma) · clamp(n·h)^gamma · cos(theta_o)."""
+    lobe = powercos.pow_cos(c, versin, gamma)
+    if mode == "scanline":
+        return lobe
     cos_o = dr.fmax(mi.Frame3f.cos_theta(wo), 0.0)
-    return normalisation(gamma) * specular_scanline(wi, wo, gamma) * cos_o
+    return normalisation(gamma) * lobe * cos_o
 
 
 def specular_weight(gamma, mode: str):
@@ -108,14 +108,14 @@ def specular_weight(gamma, mode: str):
     return 8.0 * (1.0 - dr.exp2(-0.5 * gamma - 1.0)) / (gamma + 2.0)
 
 
-def sample_lobe(wi, sample2, gamma):
+def sample_specular(wi, sample2, gamma):
     """Sample h with density (gamma+2)/(2 pi) cos^(gamma+1)(theta_h), reflect w_r about it."""
     h = powercos.sample(sample2, gamma + 1.0)
     return mi.reflect(wi, h)
 
 
-def pdf_lobe(wi, wo, gamma):
-    """Density of sample_lobe() at wo: pdf(h) / (4 d·h), 0 where d·h <= 0."""
+def pdf_specular(wi, wo, gamma):
+    """The density of :func:`sample_specular` at wo: pdf(h) / (4 d·h), 0 where d·h <= 0."""
     h = mf.half_vector(wi, wo)
     c, versin = powercos.cos_versin_z(h)
     o_dot_h = dr.dot(wo, h)
@@ -139,8 +139,13 @@ class Blinn(Phong):
         "The lobe is evaluated and sampled to ~1e-6 at any γ (:mod:`mi_brdfs.bsdfs.powercos`); "
         "the bound ``phong.MAX_EXPONENT`` = 1e8 keeps it well above the spacing of float32 "
         "directions (~1e-7)."),)
-    specular_scanline = staticmethod(specular_scanline)
-    specular_hdr = staticmethod(specular_hdr)
-    specular_weight = staticmethod(specular_weight)
-    sample_lobe = staticmethod(sample_lobe)
-    pdf_lobe = staticmethod(pdf_lobe)
+    SPECULAR = Formulas(eval_specular, sample_specular, pdf_specular, specular_weight)
+
+    @classmethod
+    def cases(cls) -> Cases:
+        # Phong's, with the fit's self-fit at Blinn's wider exponents
+        return replace(super().cases(), fits=[
+            {"diffuse_reflectance": [0.5, 0.3, 0.2], "specular_reflectance": [0.3, 0.3, 0.25],
+             "exponent": 80.0},
+            {"diffuse_reflectance": [0.1, 0.3, 0.5], "specular_reflectance": [0.5, 0.4, 0.2],
+             "exponent": 600.0}])

@@ -1,6 +1,6 @@
 """What runs of each model: its cases, declared in its own module.
 
-Every model's ``cases()`` (see :mod:`.model`) returns a :class:`Cases`: the
+Every model's ``cases()`` (see :meth:`.base.BRDF.cases`) returns a :class:`Cases`: the
 configurations the conformance battery runs it through (χ² of its sampler,
 sample weight × pdf = eval, the white furnace, numerical extremes, gradients,
 reciprocity), the lobe its plots show, the configurations the bench times and
@@ -20,6 +20,9 @@ import math
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import Callable
+
+import mitsuba as mi
+import numpy as np
 
 HALF_PI = 0.5 * math.pi
 THETAS_LOW = (0, 15, 30, 45, 60, 75)
@@ -109,8 +112,16 @@ class Cases:
                                                    # switched off, the model without it)
     variants: list[tuple[str, dict]] = field(default_factory=list)   # (label, config) its
                                                    # options are compared on
+    # --- the fit ------------------------------------------------------------------------
+    fits: list[dict] = field(default_factory=list)   # parameter values a fit of the model
+                                                   # to itself recovers: coloured, away from
+                                                   # every bound (a hard step has no gradient)
+    anisotropic: list[tuple[str, dict]] = field(default_factory=list)   # (the fit's name,
+                                                   # its properties): what is fitted once more
+                                                   # to an anisotropic target
     # --- the documentation ---------------------------------------------------------------
     pictures: Pictures | tuple[Pictures, ...] | None = None   # one row of renders each
+    hdr_exposure: float = 0.0            # EV of its bundled scene's hdr render (README)
     mitsuba: tuple[str, ...] = ()        # Mitsuba's related plugins (links on the page)
     checked: str = ""                    # what it is checked against beyond the battery
                                          # (the README's table, Markdown)
@@ -128,8 +139,6 @@ def rgb(c) -> dict:
 
 def ramp(colours, filter_type: str = "bilinear") -> dict:
     """A 1-D ramp texture (one pixel high, left = cosine -1, right = +1)."""
-    import mitsuba as mi
-    import numpy as np
     data = np.asarray(colours, dtype=np.float32)[None, :, :]
     return {"type": "bitmap", "bitmap": mi.Bitmap(data), "wrap_mode": "clamp",
             "filter_type": filter_type, "raw": True}
@@ -148,15 +157,22 @@ def label(config: dict) -> str:
 #  Every model's cases
 # ----------------------------------------------------------------------------
 
+_models: dict[str, type] = {}        # the registry's models by name (see use())
 _built: dict[str, Cases] = {}
+
+
+def use(models: dict[str, type]) -> None:
+    """The registry (:mod:`mi_brdfs.bsdfs`) hands its models down, in its order."""
+    _models.clear()
+    _models.update(models)
+    _built.clear()
 
 
 def of(name: str) -> Cases:
     """The cases of plugin ``name``, built on first use (a model's own: a broken
     one fails its own model only)."""
-    from . import BY_NAME
     if name not in _built:
-        _built[name] = BY_NAME[name].cases()
+        _built[name] = _models[name].cases()
     return _built[name]
 
 
@@ -165,18 +181,15 @@ class _All(Mapping):
     first use (iterating the names builds nothing)."""
 
     def __getitem__(self, name: str) -> Cases:
-        from . import BY_NAME
-        if name not in BY_NAME:
+        if name not in _models:
             raise KeyError(name)
         return of(name)
 
     def __iter__(self) -> Iterator[str]:
-        from . import BY_NAME
-        return iter(BY_NAME)
+        return iter(_models)
 
     def __len__(self) -> int:
-        from . import BY_NAME
-        return len(BY_NAME)
+        return len(_models)
 
 
 ALL: Mapping[str, Cases] = _All()

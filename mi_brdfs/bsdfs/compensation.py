@@ -368,7 +368,7 @@ def walk_residual(white: AlbedoSpec, black: AlbedoSpec, walk: WalkSpec) -> Table
 class Compensation:
     """The multiple-scattering lobe of one plugin instance: g(ω), G_avg and the
     colour C as functions of the model's evaluated inputs ``inp`` (traced),
-    and the lobe it belongs to (``"diffuse"`` or ``"glossy"``: the lobe whose
+    and the lobe it belongs to (``"diffuse"`` or ``"specular"``: the lobe whose
     weight it takes, whose kind a sample of it reports, and without which it
     is not traced). ``data`` is what the plugin holds as its member ``m_ms``
     (Dr.Jit arrays a frozen function must see as inputs, or None).
@@ -382,7 +382,7 @@ class Compensation:
     tests/bsdfs/test_registry.py checks that every plugin is freed by
     reference counting alone."""
 
-    lobe = "glossy"
+    lobe = "specular"
 
     def prepare(self, plugin) -> dict | None:
         """At load time and at every update: fix what is constant over the
@@ -414,7 +414,7 @@ class Tabulated(Compensation):
     is C."""
 
     def __init__(self, table: Table, parameters: Callable, sources: tuple[str, ...],
-                 colour: Callable, lobe: str = "glossy"):
+                 colour: Callable, lobe: str = "specular"):
         self.table, self.parameters, self.sources = table, parameters, tuple(sources)
         self.colour_of, self.lobe = colour, lobe
         self.specialised: Specialised | None = None

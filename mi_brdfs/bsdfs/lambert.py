@@ -27,12 +27,14 @@ differentiated, never updated) the plugin has no lobe at all. A viewer or light 
 """
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import drjit as dr
 import mitsuba as mi
 
-from .base import BRDF, Inputs
+from .base import BRDF
 from .cases import Cases, Chi2, Furnace, Pictures, Twin, rgb
-from .lobes import Scaled
+from .mixture import Scaled, Spectrum
 from .params import Param
 
 
@@ -40,7 +42,7 @@ from .params import Param
 #  The formulas (cos_o = d·n, the light's cosine)
 # ----------------------------------------------------------------------------
 
-def f(m_d, cos_o, mode: str) -> Scaled:
+def eval_diffuse(m_d, cos_o, mode: str) -> Scaled:
     """The Lambert lobe in eval convention, as m_D times its shape: m_D·clamp(d·n)
     (scanline, the lecture's f_r) or m_D/pi·cos(theta_o) (hdr). Also the diffuse
     lobe of phong, blinn, ward and cook_torrance. In hdr mode, under the cosine
@@ -52,7 +54,7 @@ def f(m_d, cos_o, mode: str) -> Scaled:
 
 
 def albedo(m_d, mode: str):
-    """What f() reflects in all (hemispherical integral): m_D, or pi·m_D for the
+    """What eval_diffuse() reflects in all (hemispherical integral): m_D, or pi·m_D for the
     scan-line form, which has no 1/pi. The diffuse lobe's selection weight."""
     return m_d * (dr.pi if mode == "scanline" else 1.0)
 
@@ -60,6 +62,11 @@ def albedo(m_d, mode: str):
 # ----------------------------------------------------------------------------
 #  The plugin
 # ----------------------------------------------------------------------------
+
+class Inputs(NamedTuple):
+    """What one call evaluates at its point."""
+    colour_d: Spectrum | None       # m_D, where the lobe is present
+
 
 class Lambert(BRDF):
     __doc__ = __doc__                  # the module's documentation, for help()
@@ -70,11 +77,11 @@ class Lambert(BRDF):
     def has_diffuse(self) -> bool:
         return not self.off("reflectance")
 
-    def eval_textures(self, si, active):
-        return Inputs(colour_d=self.m_reflectance.eval(si, active))
+    def eval_textures(self, si, active) -> Inputs:
+        return Inputs(self.colour("reflectance", "diffuse", si, active))
 
-    def f_diffuse(self, inp, si, wo):
-        return f(inp.colour_d, mi.Frame3f.cos_theta(wo), self.options.mode)
+    def eval_diffuse(self, inp, si, wo):
+        return eval_diffuse(inp.colour_d, mi.Frame3f.cos_theta(wo), self.options.mode)
 
     # --- what runs of it: the tests, the validation report, the bench, the pictures ---
     @classmethod
@@ -95,6 +102,7 @@ class Lambert(BRDF):
                         floor={"type": "bench_floor_diffuse", "reflectance": 0.6},
                         spread=lambda t: {"reflectance": rgb([0.2 + 0.6 * t, 0.5, 0.8 - 0.6 * t])})],
             pictures=Pictures("reflectance", (0.2, 0.5, 0.8)),
+            fits=[{"reflectance": [0.6, 0.35, 0.15]}, {"reflectance": [0.2, 0.5, 0.7]}],
             mitsuba=("diffuse",),
             checked="Mitsuba's `diffuse`, to float precision",
         )

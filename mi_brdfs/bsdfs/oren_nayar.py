@@ -84,6 +84,8 @@ enters as the paper defines it, per bounce (ρ_ms = m_D² E_avg /
 """
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import math
 
 import drjit as dr
@@ -91,10 +93,10 @@ import mitsuba as mi
 import numpy as np
 
 from . import compensation
-from .base import BRDF, Inputs
+from .base import BRDF
 from .cases import HALF_PI, Cases, Chi2, Furnace, Pictures, preserves, rgb
 from .grid import Axis, Grid
-from .lobes import Scaled
+from .mixture import Float, Scaled, Spectrum
 from .params import Option, Param, Reader
 
 METHODS = ("exact", "table")
@@ -211,6 +213,13 @@ def fon_albedo_average(r):
 #  The plugin
 # ----------------------------------------------------------------------------
 
+class Inputs(NamedTuple):
+    """What one call evaluates at its point."""
+    colour_d: Spectrum | None       # m_D, where the lobe is present
+    sigma: Float                    # σ, the lecture's roughness
+    r: Float                        # EON's roughness (energy compensation)
+
+
 class OrenNayar(BRDF):
     __doc__ = __doc__                  # the module's documentation, for help()
     name = "oren_nayar"
@@ -246,12 +255,12 @@ class OrenNayar(BRDF):
     def has_diffuse(self) -> bool:
         return not self.off("reflectance")
 
-    def eval_textures(self, si, active):
+    def eval_textures(self, si, active) -> Inputs:
         sigma = self.m_sigma.eval_1(si, active)
-        return Inputs(colour_d=self.m_reflectance.eval(si, active), sigma=sigma,
-                      r=eon_roughness(sigma))
+        return Inputs(self.colour("reflectance", "diffuse", si, active), sigma,
+                      eon_roughness(sigma))
 
-    def f_diffuse(self, inp, si, wo):
+    def eval_diffuse(self, inp, si, wo):
         if self.options.energy_compensation:       # EON: FON + the base's multiple scattering
             return fon(inp.colour_d, inp.r, si.wi, wo)
         cos_i, cos_o = mi.Frame3f.cos_theta(si.wi), mi.Frame3f.cos_theta(wo)
@@ -313,6 +322,8 @@ class OrenNayar(BRDF):
             # the lecture's table against the exact formulas (the bench's oren_nayar group)
             variants=[("oren_nayar table vs exact", {**on, "sigma": 0.5, "reflectance": 0.8})],
             pictures=Pictures("sigma", (0.0, 0.5, 1.0, HALF_PI), {"reflectance": 0.8}),
+            fits=[{"reflectance": [0.6, 0.35, 0.15], "sigma": 0.3},
+                  {"reflectance": [0.2, 0.5, 0.7], "sigma": 0.8}],
             mitsuba=("diffuse", "principled"),
             checked="`diffuse` at σ = 0; EON's published listing",
         )

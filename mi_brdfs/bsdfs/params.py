@@ -67,6 +67,9 @@ class Param:
     means every finite number (up to :data:`FLOAT_MAX`): infinity is never valid. ``doc`` is its meaning, in the
     plugin's generated parameter table (:func:`parameter_table`); an
     ``optional`` parameter is read only when given (it has no default).
+    ``discontinuous``: the lobe's sampler moves with it (a roughness, an
+    exponent), so ``traverse`` flags it as Mitsuba flags ``roughconductor``'s
+    ``alpha``: differentiable and discontinuous.
     Checked when declared: a known kind and role, lo <= default <= hi
     (DeclarationError otherwise).
     """
@@ -79,6 +82,7 @@ class Param:
     upper: float | None = None
     doc: str = ""
     optional: bool = False
+    discontinuous: bool = False
 
     KINDS = ("spectrum", "scalar", "float")
     ROLES = ("colour", "weight", "shape")
@@ -138,16 +142,19 @@ class Param:
 class Option:
     """A non-differentiable choice: one of ``choices`` (strings), a boolean
     when ``default`` is a bool, or an integer in [``lo``, ``hi``] when it is an
-    int. Read at load time into ``self.<name>``; ``doc`` is its meaning, in
-    the generated parameter table. Checked when declared: the default is one
-    of the choices, a bool without choices, or an int within its range
-    (DeclarationError otherwise)."""
+    int. Read at load time into ``self.options.<name>``; ``doc`` is its
+    meaning, in the generated parameter table. ``model``: each choice makes a
+    different model (a distribution, a geometric term), not another way to
+    compute or sample the same one; the fit tries every choice. Checked when
+    declared: the default is one of the choices, a bool without choices, or an
+    int within its range (DeclarationError otherwise)."""
     name: str
     default: str | bool | int
     choices: tuple[str, ...] = ()
     doc: str = ""
     lo: int | None = None
     hi: int | None = None
+    model: bool = False
 
     def __post_init__(self):
         if isinstance(self.default, bool):
@@ -304,11 +311,6 @@ def number(x: float):
 
 T = mi.Properties.Type
 NUMBERS = (T.Float, T.Integer)
-
-
-def to_float(x) -> float:
-    """A Python float from an opaque Float (JIT variants) or a float (scalar ones)."""
-    return float(x[0]) if dr.is_array_v(x) else float(x)
 
 
 class Reader:

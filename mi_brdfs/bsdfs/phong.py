@@ -58,6 +58,9 @@ smooth (C2) in γ.
 """
 from __future__ import annotations
 
+from functools import partial
+from typing import Callable, NamedTuple
+
 import drjit as dr
 import mitsuba as mi
 
@@ -65,7 +68,7 @@ from . import compensation, lambert, powercos
 from .base import BRDF
 from .cases import Cases, Chi2, Furnace, Pictures, preserves, rgb
 from .grid import Axis
-from .lobes import Scaled, mean
+from .mixture import Float, Scaled, Spectrum, mean
 from .params import Param
 
 MAX_EXPONENT = 1e8     # lobe ~1e-4 rad wide, still 1000x the float32 direction spacing
@@ -86,16 +89,15 @@ def cos_alpha(wi, wo):
     return powercos.cos_versin(wo, mirror(wi))
 
 
-def specular_scanline(wi, wo, gamma):
-    """The lecture's clamp(w_r·r)^gamma."""
+def eval_specular(wi, wo, gamma, mode: str):
+    """The specular lobe at wo: the lecture's clamp(w_r·r)^gamma (scanline), or
+    the normalised (gamma + 2)/(2 pi) · clamp(w_r·r)^gamma · cos(theta_o) (hdr)."""
     cos_a, versin_a = cos_alpha(wi, wo)
-    return powercos.pow_cos(cos_a, versin_a, gamma)
-
-
-def specular_hdr(wi, wo, gamma):
-    """(gamma + 2)/(2 pi) · clamp(w_r·r)^gamma · cos(theta_o): the normalised lobe."""
+    lobe = powercos.pow_cos(cos_a, versin_a, gamma)
+    if mode == "scanline":
+        return lobe
     cos_o = dr.fmax(mi.Frame3f.cos_theta(wo), 0.0)
-    return (gamma + 2.0) * dr.inv_two_pi * specular_scanline(wi, wo, gamma) * cos_o
+    return (gamma + 2.0) * dr.inv_two_pi * lobe * cos_o
 
 
 def specular_weight(gamma, mode: str):
@@ -105,15 +107,31 @@ def specular_weight(gamma, mode: str):
     return 1.0 if mode == "hdr" else 2.0 / (gamma + 1.0)
 
 
-def sample_lobe(wi, sample2, gamma):
+def sample_specular(wi, sample2, gamma):
     """A light direction with density (gamma+1)/(2 pi) cos^gamma(alpha) about r'."""
     return mi.Frame3f(mirror(wi)).to_world(powercos.sample(sample2, gamma))
 
 
-def pdf_lobe(wi, wo, gamma):
-    """Density of sample_lobe() at wo (per solid angle)."""
+def pdf_specular(wi, wo, gamma):
+    """The density of :func:`sample_specular` at wo (per solid angle)."""
     cos_a, versin_a = cos_alpha(wi, wo)
     return powercos.pdf(cos_a, versin_a, gamma)
+
+
+class Formulas(NamedTuple):
+    """The specular lobe's formulas a plugin of this family calls: Phong's
+    (this module) or Blinn's (:mod:`.blinn`), with the same signatures."""
+    eval: Callable       # eval_specular(wi, wo, gamma, mode)
+    sample: Callable     # sample_specular(wi, sample2, gamma)
+    pdf: Callable        # pdf_specular(wi, wo, gamma)
+    weight: Callable     # specular_weight(gamma, mode)
+
+
+class Inputs(NamedTuple):
+    """What one call evaluates at its point."""
+    colour_d: Spectrum | None       # m_D, where the diffuse lobe is present
+    colour_s: Spectrum | None       # m_S, where the specular lobe is present
+    gamma: Float                    # the exponent
 
 
 # ----------------------------------------------------------------------------
@@ -127,8 +145,8 @@ ALBEDO_AXES = (Axis("mu", 0.0, 1.0, 33, "sqrt"),
 
 class Phong(BRDF):
     __doc__ = __doc__                  # the module's documentation, for help()
-    # Also the base of blinn.Blinn, which differs only by the formulas below
-    # (its module's functions of the same names) and its exponent's meaning.
+    # Also the base of blinn.Blinn, which differs only by its formulas
+    # (SPECULAR) and its exponent's meaning.
     name = "phong"
     PARAMS = (
         Param("diffuse_reflectance", 0.5, doc="m_D, the diffuse colour; above 1 allowed "
@@ -136,6 +154,7 @@ class Phong(BRDF):
         Param("specular_reflectance", 0.5, doc="m_S, the specular colour. With the default "
               "m_D + m_S = 1 the hdr model reflects at most all the light it receives."),
         Param("exponent", 100.0, 0.0, MAX_EXPONENT, kind="scalar", role="shape",
+              discontinuous=True,
               doc="γ, the specular power: the larger, the smaller and sharper the highlight "
                   "(the lecture: \"one or two hundreds\" in practice). γ = 0 is a uniform lobe "
                   "over the hemisphere about the mirror direction. The lobe is evaluated and "
@@ -143,47 +162,44 @@ class Phong(BRDF):
                   "``MAX_EXPONENT`` = 1e8 (a lobe 1e-4 rad wide) keeps it well above the "
                   "spacing of float32 directions (~1e-7)."),
     )
-    specular_scanline = staticmethod(specular_scanline)
-    specular_hdr = staticmethod(specular_hdr)
-    specular_weight = staticmethod(specular_weight)
-    sample_lobe = staticmethod(sample_lobe)
-    pdf_lobe = staticmethod(pdf_lobe)
+    SPECULAR = Formulas(eval_specular, sample_specular, pdf_specular, specular_weight)
 
     @classmethod
     def tables(cls) -> list[compensation.AlbedoSpec]:
-        return [compensation.AlbedoSpec(cls.name, ALBEDO_AXES, f=cls.specular_hdr,
-                                        sample=cls.sample_lobe, pdf=cls.pdf_lobe)]
+        lobe = cls.SPECULAR
+        return [compensation.AlbedoSpec(cls.name, ALBEDO_AXES, f=partial(lobe.eval, mode="hdr"),
+                                        sample=lobe.sample, pdf=lobe.pdf)]
 
     # --- lobes ---------------------------------------------------------------
     def has_diffuse(self) -> bool:
         return not self.off("diffuse_reflectance")
 
-    def has_glossy(self) -> bool:
+    def has_specular(self) -> bool:
         return not self.off("specular_reflectance")
 
-    def eval_textures(self, si, active):
-        return self.colours(si, active, gamma=self.m_exponent.eval_1(si, active))
+    def eval_textures(self, si, active) -> Inputs:
+        return Inputs(self.colour("diffuse_reflectance", "diffuse", si, active),
+                      self.colour("specular_reflectance", "specular", si, active),
+                      self.m_exponent.eval_1(si, active))
 
-    def f_diffuse(self, inp, si, wo):
-        return lambert.f(inp.colour_d, mi.Frame3f.cos_theta(wo), self.options.mode)
+    def eval_diffuse(self, inp, si, wo):
+        return lambert.eval_diffuse(inp.colour_d, mi.Frame3f.cos_theta(wo), self.options.mode)
 
-    def f_glossy(self, inp, si, wo):
-        spec = self.specular_scanline if self.options.mode == "scanline" else self.specular_hdr
-        return Scaled(inp.colour_s, spec(si.wi, wo, inp.gamma))
+    def eval_specular(self, inp, si, wo):
+        return Scaled(inp.colour_s, self.SPECULAR.eval(si.wi, wo, inp.gamma, self.options.mode))
+
+    def sample_specular(self, inp, si, sample2):
+        return self.SPECULAR.sample(si.wi, sample2, inp.gamma)
+
+    def pdf_specular(self, inp, si, wo):
+        return self.SPECULAR.pdf(si.wi, wo, inp.gamma)
 
     def selection_weights(self, inp, si):
         lobes = self.state.plan.lobes
         w_d = mean(inp.colour_d) if lobes.diffuse else mi.Float(0.0)
-        w_s = (mean(inp.colour_s) * self.specular_weight(inp.gamma, self.options.mode)
-               if lobes.glossy else mi.Float(0.0))
+        w_s = (mean(inp.colour_s) * self.SPECULAR.weight(inp.gamma, self.options.mode)
+               if lobes.specular else mi.Float(0.0))
         return w_d, w_s
-
-    # --- glossy sampling ----------------------------------------------------------
-    def sample_glossy(self, inp, si, sample2):
-        return self.sample_lobe(si.wi, sample2, inp.gamma)
-
-    def pdf_glossy(self, inp, si, wo):
-        return self.pdf_lobe(si.wi, wo, inp.gamma)
 
     # --- energy compensation: what the lobe loses below the horizon ---------------
     def compensation(self) -> compensation.Compensation:
@@ -261,6 +277,10 @@ class Phong(BRDF):
                         {"type": "lambert", "reflectance": 0.6})] if name == "phong" else [],
             pictures=Pictures("exponent", (10.0, 100.0, 1000.0), {"diffuse_reflectance": 0.3,
                                                                   "specular_reflectance": 0.6}),
+            fits=[{"diffuse_reflectance": [0.5, 0.3, 0.2],
+                   "specular_reflectance": [0.3, 0.3, 0.25], "exponent": 40.0},
+                  {"diffuse_reflectance": [0.1, 0.3, 0.5],
+                   "specular_reflectance": [0.5, 0.4, 0.2], "exponent": 400.0}],
             mitsuba=("plastic", "roughplastic"),
             checked="white furnace",
         )

@@ -85,15 +85,17 @@ glossy flags), so integrators sample the lights for them.
 """
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import math
 
 import drjit as dr
 import mitsuba as mi
 
 from . import microfacet as mf
-from .base import BRDF, Inputs
+from .base import BRDF
 from .cases import Cases, Chi2, Furnace, Pictures, ramp, rgb
-from .lobes import mean
+from .mixture import Float, Spectrum, mean
 from .params import Option, Param, Reader
 
 SPECULAR_MODELS = ("phong", "blinn")
@@ -197,11 +199,24 @@ def _toon_chi2_configs() -> list[dict]:
     return configs
 
 
+class Inputs(NamedTuple):
+    """What one call evaluates at its point: the two-tone steps of the lobes
+    present that have no ramp (None otherwise)."""
+    colour_d1: Spectrum | None = None    # m_D1, the lit colour
+    colour_d2: Spectrum | None = None    # m_D2, the shade
+    t_d: Float | None = None             # t_D
+    colour_s1: Spectrum | None = None    # m_S1, the highlight colour
+    colour_s2: Spectrum | None = None    # m_S2, outside the highlight
+    t_s: Float | None = None             # t_S
+    k: Float | None = None               # the highlight cone's opening, 1 - cos
+    omega: Float | None = None           # the highlight's solid angle
+
+
 class Toon(BRDF):
     __doc__ = __doc__                  # the module's documentation, for help()
     name = "toon"
     reciprocal = False
-    OPTIONS = (Option("specular_model", "phong", SPECULAR_MODELS,
+    OPTIONS = (Option("specular_model", "phong", SPECULAR_MODELS, model=True,
                       doc='``"phong"``: the specular cosine is ω_r·r, r = 2(d·n)n - d; '
                           '``"blinn"``: n·h, h = normalize(d + ω_r) (the lecture\'s Phong '
                           "and Blinn with γ = 1)."),)
@@ -254,7 +269,7 @@ class Toon(BRDF):
             return not self.off("diffuse_ramp")
         return not (self.off("diffuse_reflectance") and self.off("diffuse_shade"))
 
-    def has_glossy(self) -> bool:
+    def has_specular(self) -> bool:
         if self.m_specular_ramp is not None:
             return not self.off("specular_ramp")
         return not (self.off("specular_reflectance") and self.off("specular_shade"))
@@ -269,21 +284,21 @@ class Toon(BRDF):
         # path tracer the surface is opaque and light from below never reaches it.
         return self.options.mode == "scanline"
 
-    def eval_textures(self, si, active):
-        inp, lobes = Inputs(), self.state.plan.lobes
+    def eval_textures(self, si, active) -> Inputs:
+        steps, lobes = {}, self.state.plan.lobes
         if lobes.diffuse and self.m_diffuse_ramp is None:
-            inp.colour_d1 = self.m_diffuse_reflectance.eval(si, active)
-            inp.colour_d2 = self.m_diffuse_shade.eval(si, active)
-            inp.t_d = self.m_diffuse_threshold.eval_1(si, active)
-        if lobes.glossy and self.m_specular_ramp is None:
-            inp.colour_s1 = self.m_specular_reflectance.eval(si, active)
-            inp.colour_s2 = self.m_specular_shade.eval(si, active)
-            inp.t_s = self.m_specular_threshold.eval_1(si, active)
-            inp.k = cone_opening(inp.t_s - 0.5 * self.m_smoothness, self.options.specular_model)
+            steps.update(colour_d1=self.m_diffuse_reflectance.eval(si, active),
+                         colour_d2=self.m_diffuse_shade.eval(si, active),
+                         t_d=self.m_diffuse_threshold.eval_1(si, active))
+        if lobes.specular and self.m_specular_ramp is None:
+            t_s = self.m_specular_threshold.eval_1(si, active)
+            k = cone_opening(t_s - 0.5 * self.m_smoothness, self.options.specular_model)
             # solid angle of the highlight: the cone (phong), ~4x the half-vector cone (blinn)
             scale = 1.0 if self.options.specular_model == "phong" else 4.0
-            inp.omega = dr.fmin(2.0 * dr.pi * inp.k * scale, 2.0 * dr.pi)
-        return inp
+            steps.update(colour_s1=self.m_specular_reflectance.eval(si, active),
+                         colour_s2=self.m_specular_shade.eval(si, active), t_s=t_s, k=k,
+                         omega=dr.fmin(2.0 * dr.pi * k * scale, 2.0 * dr.pi))
+        return Inputs(**steps)
 
     def ramp(self, tex, si, c):
         lookup = mi.SurfaceInteraction3f(si)
@@ -293,7 +308,7 @@ class Toon(BRDF):
     def scale(self):
         return 1.0 if self.options.mode == "scanline" else HDR_SCALE
 
-    def f_diffuse(self, inp, si, wo):
+    def eval_diffuse(self, inp, si, wo):
         cos_o = mi.Frame3f.cos_theta(wo)
         if self.m_diffuse_ramp is not None:
             colour = self.ramp(self.m_diffuse_ramp, si, cos_o)
@@ -301,7 +316,7 @@ class Toon(BRDF):
             colour = two_tone(cos_o, inp.t_d, self.m_smoothness, inp.colour_d1, inp.colour_d2)
         return colour * self.scale()
 
-    def f_glossy(self, inp, si, wo):
+    def eval_specular(self, inp, si, wo):
         c = specular_cosine(si.wi, wo, self.options.specular_model)
         if self.m_specular_ramp is not None:
             colour = self.ramp(self.m_specular_ramp, si, c)
@@ -337,15 +352,15 @@ class Toon(BRDF):
             else:
                 t = clamp(inp.t_d, 0.0, 1.0)
                 w_d = 2.0 * dr.pi * (mean(inp.colour_d1) * (1.0 - t) + mean(inp.colour_d2) * t)
-        if lobes.glossy:
+        if lobes.specular:
             if self.m_specular_ramp is not None:
                 w_s = self.ramp_weight(self.m_specular_ramp, si)
             else:
                 w_s = mean(inp.colour_s1) * inp.omega + mean(inp.colour_s2) * 2.0 * dr.pi
         return w_d, w_s
 
-    # --- glossy sampling: highlight cone + uniform hemisphere ---------------------
-    def sample_glossy(self, inp, si, sample2):
+    # --- specular sampling: highlight cone + uniform hemisphere -------------------
+    def sample_specular(self, inp, si, sample2):
         q = self.cone_probability(inp)
         in_cone = sample2.x < q
         # reuse sample2.x for the chosen part
@@ -362,7 +377,7 @@ class Toon(BRDF):
             wo_cone = mi.Frame3f(mi.reflect(si.wi)).to_world(square_to_cone(u, inp.k))
         return dr.select(in_cone, wo_cone, wo_rest)
 
-    def pdf_glossy(self, inp, si, wo):
+    def pdf_specular(self, inp, si, wo):
         pdf_rest = dr.select(mi.Frame3f.cos_theta(wo) > 0, dr.inv_two_pi, 0.0)
         if self.m_specular_ramp is not None:
             return pdf_rest
@@ -414,6 +429,16 @@ class Toon(BRDF):
                                                                         [0.4] * 3, [0.8] * 3]),
                                         "specular_ramp": ramp([[0.0] * 3] * 7 + [[1.0] * 3])})],
             pictures=Pictures("specular_threshold", (0.5, 0.8, 0.95)),
+            fits=[{"diffuse_reflectance": [0.8, 0.5, 0.3], "diffuse_shade": [0.2, 0.1, 0.1],
+                   "diffuse_threshold": 0.4, "specular_reflectance": [0.9, 0.9, 0.8],
+                   "specular_shade": [0.05, 0.05, 0.1], "specular_threshold": 0.85,
+                   "smoothness": 0.3},
+                  {"diffuse_reflectance": [0.3, 0.6, 0.8], "diffuse_shade": [0.1, 0.2, 0.3],
+                   "diffuse_threshold": 0.1, "specular_reflectance": [0.7, 0.6, 0.5],
+                   "specular_shade": [0.02, 0.04, 0.06], "specular_threshold": 0.95,
+                   "smoothness": 0.15}],
+            # its hdr mode reflects the scan-line colours / 2π: +log2(2π) EV on the README
+            hdr_exposure=round(math.log2(2.0 * math.pi), 2),
             mitsuba=("diffuse",),
             checked="the lecture's step functions",
         )

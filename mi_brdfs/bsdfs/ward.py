@@ -88,6 +88,8 @@ horizon) E is clamped to 1: nothing is added there.
 """
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import drjit as dr
 import mitsuba as mi
 
@@ -95,7 +97,7 @@ from . import compensation, lambert, microfacet as mf
 from .base import BRDF
 from .cases import THETAS_LOW, Cases, Chi2, Furnace, Pictures, preserves, rgb
 from .grid import Axis
-from .lobes import Scaled, mean
+from .mixture import Float, Scaled, Spectrum, mean
 from .params import Option, Param, Reader
 
 ALPHA_MIN = 1e-4      # smallest roughness used (0 is clamped here)
@@ -164,7 +166,11 @@ def specular_angles(wi, wo, alpha_t, alpha_b):
     return f
 
 
-SPECULAR = {"vectors": specular_vectors, "angles": specular_angles}
+def eval_specular(wi, wo, alpha_t, alpha_b, formula: str = "vectors"):
+    """The specular lobe at wo per unit m_S (the eval value, both modes), by the
+    lecture's dot-product form (``"vectors"``) or its angle form (``"angles"``)."""
+    form = specular_vectors if formula == "vectors" else specular_angles
+    return form(wi, wo, alpha_t, alpha_b)
 
 
 # ----------------------------------------------------------------------------
@@ -189,20 +195,21 @@ def pdf_half_vector(h, alpha_t, alpha_b):
 
 
 def pdf_specular(wi, wo, alpha_t, alpha_b):
-    """Density of reflect(wi, h), h ~ p_h, at wo: p_h(h) / (4 wo·h)."""
+    """The density of :func:`sample_specular` at wo: p_h(h) / (4 wo·h)."""
     h = mf.half_vector(wi, wo)
     o_h = dr.dot(wo, h)
     p = pdf_half_vector(h, alpha_t, alpha_b) / (4.0 * dr.fmax(o_h, TINY))
     return dr.select(o_h > 0, p, 0.0)
 
 
+def sample_specular(wi, sample2, alpha_t, alpha_b):
+    """Sample h, the half vector, then reflect the viewer about it."""
+    return mi.reflect(wi, sample_half_vector(sample2, alpha_t, alpha_b))
+
+
 # ----------------------------------------------------------------------------
 #  The plugin
 # ----------------------------------------------------------------------------
-
-def sample_lobe(wi, sample2, alpha_t, alpha_b):
-    """Sample h, the half vector, then reflect the viewer about it."""
-    return mi.reflect(wi, sample_half_vector(sample2, alpha_t, alpha_b))
 
 
 # Energy compensation: E of the specular lobe (m_S = 1) over (mu, alpha) when
@@ -224,16 +231,24 @@ def _clamped(f):
 ISOTROPIC = compensation.AlbedoSpec(
     "ward/isotropic", ISOTROPIC_AXES,
     f=_clamped(lambda wi, wo, a: specular_vectors(wi, wo, a, a)),
-    sample=_clamped(lambda wi, u, a: sample_lobe(wi, u, a, a)),
+    sample=_clamped(lambda wi, u, a: sample_specular(wi, u, a, a)),
     pdf=_clamped(lambda wi, wo, a: pdf_specular(wi, wo, a, a)))
 ANISOTROPIC = compensation.AlbedoSpec(                  # 140,625 nodes: 128² samples (~1 min)
     "ward/anisotropic", ANISOTROPIC_AXES, f=_clamped(specular_vectors),
-    sample=_clamped(sample_lobe), pdf=_clamped(pdf_specular), samples=128)
+    sample=_clamped(sample_specular), pdf=_clamped(pdf_specular), samples=128)
 
 
 
 # What runs of the model (its cases(), at the end of the class) uses these.
 WARD_ALPHAS = [(1e-3, 0.5), (0.5, 1e-3), (0.0, 0.0), (1e-4, 1e-4), (1.0, 1.0), (0.2, 0.2)]
+
+
+class Inputs(NamedTuple):
+    """What one call evaluates at its point."""
+    colour_d: Spectrum | None       # m_D, where the diffuse lobe is present
+    colour_s: Spectrum | None       # m_S, where the specular lobe is present
+    alpha_t: Float                  # the roughness along the tangent
+    alpha_b: Float                  # ... and along the bitangent
 
 
 class Ward(BRDF):
@@ -247,14 +262,14 @@ class Ward(BRDF):
         Param("diffuse_reflectance", 0.5, doc="m_D, the Lambert colour; above 1 allowed "
               "(scanline mode clamps)."),
         Param("specular_reflectance", 0.2, doc="m_S, the specular colour."),
-        Param("alpha", 0.1, kind="scalar", role="shape", upper=1.0,
+        Param("alpha", 0.1, kind="scalar", role="shape", upper=1.0, discontinuous=True,
               doc="isotropic roughness: sets both alpha_u and alpha_v. Giving it together "
                   "with ``alpha_u`` or ``alpha_v`` is an error."),
-        Param("alpha_u", 0.1, kind="scalar", role="shape", upper=1.0,
+        Param("alpha_u", 0.1, kind="scalar", role="shape", upper=1.0, discontinuous=True,
               doc="α_t, the roughness along the tangent t: Mitsuba's shading-frame ``s`` "
                   "axis (local x, along dp/du), so the highlight follows the surface's UV "
                   "parametrisation."),
-        Param("alpha_v", 0.1, kind="scalar", role="shape", upper=1.0,
+        Param("alpha_v", 0.1, kind="scalar", role="shape", upper=1.0, discontinuous=True,
               doc="α_b, the roughness along the bitangent b (local y)."),
     )
 
@@ -277,37 +292,38 @@ class Ward(BRDF):
     def has_diffuse(self) -> bool:
         return not self.off("diffuse_reflectance")
 
-    def has_glossy(self) -> bool:
+    def has_specular(self) -> bool:
         return not self.off("specular_reflectance")
 
-    def eval_textures(self, si, active):
+    def eval_textures(self, si, active) -> Inputs:
         if self.anisotropic:
             alpha_t = dr.fmax(self.m_alpha_u.eval_1(si, active), ALPHA_MIN)
             alpha_b = dr.fmax(self.m_alpha_v.eval_1(si, active), ALPHA_MIN)
         else:
             alpha_t = alpha_b = dr.fmax(self.m_alpha.eval_1(si, active), ALPHA_MIN)
-        return self.colours(si, active, alpha_t=alpha_t, alpha_b=alpha_b)
+        return Inputs(self.colour("diffuse_reflectance", "diffuse", si, active),
+                      self.colour("specular_reflectance", "specular", si, active),
+                      alpha_t, alpha_b)
 
-    def f_diffuse(self, inp, si, wo):
-        return lambert.f(inp.colour_d, mi.Frame3f.cos_theta(wo), self.options.mode)
+    def eval_diffuse(self, inp, si, wo):
+        return lambert.eval_diffuse(inp.colour_d, mi.Frame3f.cos_theta(wo), self.options.mode)
 
-    def f_glossy(self, inp, si, wo):
-        specular = SPECULAR[self.options.formula]
-        return Scaled(inp.colour_s, specular(si.wi, wo, inp.alpha_t, inp.alpha_b))
+    def eval_specular(self, inp, si, wo):
+        return Scaled(inp.colour_s, eval_specular(si.wi, wo, inp.alpha_t, inp.alpha_b,
+                                                  self.options.formula))
+
+    def sample_specular(self, inp, si, sample2):
+        return sample_specular(si.wi, sample2, inp.alpha_t, inp.alpha_b)
+
+    def pdf_specular(self, inp, si, wo):
+        return pdf_specular(si.wi, wo, inp.alpha_t, inp.alpha_b)
 
     def selection_weights(self, inp, si):
         lobes = self.state.plan.lobes
         w_d = lambert.albedo(mean(inp.colour_d), self.options.mode) if lobes.diffuse \
             else mi.Float(0.0)
-        w_s = mean(inp.colour_s) if lobes.glossy else mi.Float(0.0)
+        w_s = mean(inp.colour_s) if lobes.specular else mi.Float(0.0)
         return w_d, w_s
-
-    # --- glossy sampling ----------------------------------------------------------
-    def sample_glossy(self, inp, si, sample2):
-        return sample_lobe(si.wi, sample2, inp.alpha_t, inp.alpha_b)
-
-    def pdf_glossy(self, inp, si, wo):
-        return pdf_specular(si.wi, wo, inp.alpha_t, inp.alpha_b)
 
     # --- energy compensation: what the lobe loses below the horizon ---------------
     def compensation(self) -> compensation.Compensation:
@@ -392,6 +408,11 @@ class Ward(BRDF):
                         {**w, "diffuse_reflectance": 0.5, "alpha_u": 0.1, "alpha_v": 0.3})],
             pictures=Pictures("alpha_v", (0.05, 0.15, 0.4), {"alpha_u": 0.05,
                                                              "diffuse_reflectance": 0.3}),
+            fits=[{"diffuse_reflectance": [0.5, 0.3, 0.2],
+                   "specular_reflectance": [0.3, 0.3, 0.25], "alpha": 0.15},
+                  {"diffuse_reflectance": [0.1, 0.3, 0.5],
+                   "specular_reflectance": [0.5, 0.4, 0.2], "alpha": 0.4}],
+            anisotropic=[("ward/anisotropic", {"alpha_u": 0.1, "alpha_v": 0.1})],
             mitsuba=("roughconductor", "roughplastic"),
             checked="reciprocity; its two forms agree",
         )

@@ -107,7 +107,7 @@ def test_cases_cover_the_plugin(name):
     entry = CASES[name]
     chi2_modes = {m for c in entry.chi2 for m in modes_of(c.config)}
     assert chi2_modes == set(MODES), f"{name}: χ² in {chi2_modes} only"
-    for part in ("consistency", "furnace", "extremes", "interior"):
+    for part in ("consistency", "furnace", "extremes", "interior", "fits"):
         assert getattr(entry, part), f"{name}: no {part} configurations"
     if PLUGINS[name].compensable:
         for part in ("consistency", "furnace", "extremes", "interior"):

@@ -98,7 +98,7 @@ def test_equals_roughconductor(rng, distribution, alpha):
 
 
 def test_beckmann_g1(rng):
-    """The Smith G1 of Beckmann (a rational fit, microfacet.g1_beckmann_over_cos)
+    """The Smith G1 of Beckmann (a rational fit, microfacet.Microfacet.G1_over_cos)
     against the exact erf form in float64 (lecture.g_beckmann, math.erf), from
     the normal to cos θ = 1e-30 and for rho from ALPHA_MIN to 5: within 6e-6
     (its docstring: 5.5e-6 in float32), and G1/cos finite where G1 -> 0."""
@@ -108,13 +108,14 @@ def test_beckmann_g1(rng):
     v = from_numpy(mi.Vector3f, (s, np.zeros(mu.size), mu))
     mu32, s32 = np.array(v.z, dtype=np.float64), np.array(v.x, dtype=np.float64)
     for rho in (mf.ALPHA_MIN, 0.01, 0.1, 0.3, 1.0, 5.0):
-        g1 = np.array(mf.g1("beckmann", v, mi.Float(rho)), dtype=np.float64)
-        g1_over_cos = np.array(mf.g1_beckmann_over_cos(v, mi.Float(rho)), dtype=np.float64)
+        beckmann = mf.Microfacet("beckmann", mi.Float(rho))
+        g1 = np.array(beckmann.G1(v), dtype=np.float64)
+        g1_over_cos = np.array(beckmann.G1_over_cos(v), dtype=np.float64)
         ok = mu32 < 1.0                         # (at the normal exactly: a = inf, G1 = 1)
         exact = lecture.g_beckmann(mu32[ok] / np.hypot(mu32[ok], s32[ok]), rho)
         np.testing.assert_allclose(g1[ok], exact, rtol=6e-6, err_msg=f"rho = {rho}")
         assert np.isfinite(g1_over_cos).all() and (g1_over_cos > 0).all()
-    assert np.array(mf.g1("beckmann", mi.Vector3f(0, 0, 1), mi.Float(0.3)))[0] == \
+    assert np.array(mf.Microfacet("beckmann", mi.Float(0.3)).G1(mi.Vector3f(0, 0, 1)))[0] == \
         pytest.approx(1.0, abs=1e-6)
 
 
@@ -224,7 +225,8 @@ def test_blinn_distribution_is_normalised(alpha):
     from mi_brdfs.bsdfs import microfacet as mf
     t = np.logspace(-9, np.log10(np.pi / 2), 200_000)
     m = from_numpy(mi.Vector3f, (np.sin(t), 0 * t, np.cos(t)))
-    d = np.array(mf.D["blinn"](m, mi.Float(max(alpha, mf.ALPHA_MIN))), dtype=np.float64)
+    blinn = mf.Microfacet("blinn", mi.Float(max(alpha, mf.ALPHA_MIN)))
+    d = np.array(blinn.D(m), dtype=np.float64)
     assert np.isfinite(d).all()
     integral = np.trapezoid(d * np.cos(t) * np.sin(t) * 2 * np.pi, t)
     assert integral == pytest.approx(1.0, abs=1e-4)
@@ -237,7 +239,8 @@ def test_blinn_sampler_keeps_narrow_lobes(alpha):
     from mi_brdfs.bsdfs import microfacet as mf
     rng = np.random.default_rng(9)
     n = 1_000_000
-    m = mf.sample_blinn(from_numpy(mi.Point2f, rng.random((2, n))), mi.Float(alpha))
+    blinn = mf.Microfacet("blinn", mi.Float(alpha))
+    m = blinn.sample(mi.Vector3f(0, 0, 1), from_numpy(mi.Point2f, rng.random((2, n))))
     sin2 = np.array(m.x, dtype=np.float64) ** 2 + np.array(m.y, dtype=np.float64) ** 2
     e = 2 / alpha**2 - 1
     assert sin2.mean() == pytest.approx(2 / (e + 3), rel=0.01)

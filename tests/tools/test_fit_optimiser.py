@@ -10,47 +10,11 @@ import pytest
 
 import mitsuba as mi
 
+from mi_brdfs.bsdfs import cases
 from mi_brdfs.tools.fit import metric, models, optimise, targets, task
 
 SETTINGS = task.QUICK.replace(render=False)        # the default scan and starts; fewer pairs
 RELATIVE = ("alpha", "exponent", "sigma")          # exponents and roughnesses: within 1 %
-
-# Two coloured configurations per plugin, away from every bound (toon with
-# smooth steps: a hard step has no gradient with respect to its threshold).
-CONFIGS = {
-    "ashikhmin_shirley": [{"diffuse_reflectance": [0.5, 0.3, 0.2],
-                           "specular_reflectance": [0.3, 0.3, 0.25],
-                           "exponent_u": 40.0, "exponent_v": 200.0},
-                          {"diffuse_reflectance": [0.1, 0.3, 0.5],
-                           "specular_reflectance": [0.5, 0.4, 0.2],
-                           "exponent_u": 300.0, "exponent_v": 30.0}],
-    "lambert": [{"reflectance": [0.6, 0.35, 0.15]}, {"reflectance": [0.2, 0.5, 0.7]}],
-    "oren_nayar": [{"reflectance": [0.6, 0.35, 0.15], "sigma": 0.3},
-                   {"reflectance": [0.2, 0.5, 0.7], "sigma": 0.8}],
-    "phong": [{"diffuse_reflectance": [0.5, 0.3, 0.2], "specular_reflectance": [0.3, 0.3, 0.25],
-               "exponent": 40.0},
-              {"diffuse_reflectance": [0.1, 0.3, 0.5], "specular_reflectance": [0.5, 0.4, 0.2],
-               "exponent": 400.0}],
-    "blinn": [{"diffuse_reflectance": [0.5, 0.3, 0.2], "specular_reflectance": [0.3, 0.3, 0.25],
-               "exponent": 80.0},
-              {"diffuse_reflectance": [0.1, 0.3, 0.5], "specular_reflectance": [0.5, 0.4, 0.2],
-               "exponent": 600.0}],
-    "ward": [{"diffuse_reflectance": [0.5, 0.3, 0.2], "specular_reflectance": [0.3, 0.3, 0.25],
-              "alpha": 0.15},
-             {"diffuse_reflectance": [0.1, 0.3, 0.5], "specular_reflectance": [0.5, 0.4, 0.2],
-              "alpha": 0.4}],
-    "cook_torrance": [{"diffuse_reflectance": [0.7, 0.3, 0.1], "specular_reflectance": [0.9, 0.8, 0.6],
-                       "k": 0.3, "f0": 0.05, "alpha": 0.25},
-                      {"diffuse_reflectance": [0.2, 0.4, 0.8], "specular_reflectance": [0.8, 0.9, 0.7],
-                       "k": 0.6, "f0": 0.7, "alpha": 0.08}],
-    "toon": [{"diffuse_reflectance": [0.8, 0.5, 0.3], "diffuse_shade": [0.2, 0.1, 0.1],
-              "diffuse_threshold": 0.4, "specular_reflectance": [0.9, 0.9, 0.8],
-              "specular_shade": [0.05, 0.05, 0.1], "specular_threshold": 0.85, "smoothness": 0.3},
-             {"diffuse_reflectance": [0.3, 0.6, 0.8], "diffuse_shade": [0.1, 0.2, 0.3],
-              "diffuse_threshold": 0.1, "specular_reflectance": [0.7, 0.6, 0.5],
-              "specular_shade": [0.02, 0.04, 0.06], "specular_threshold": 0.95, "smoothness": 0.15}],
-}
-
 
 def pairs(settings=SETTINGS):
     return metric.pairs(settings.metric, settings.viewers, settings.uniform, settings.lobe)
@@ -83,7 +47,7 @@ def identifiable(plugin: str, p: dict) -> dict:
 @pytest.mark.parametrize("name", models.names())
 def test_every_model_fitted_to_itself_reaches_the_optimum(name):
     model = models.select([name])[0]
-    for config in CONFIGS[model.plugin]:
+    for config in cases.of(model.plugin).fits:      # the model's own, coloured, off the bounds
         truth = {**model.properties(), **config}
         result = fit_to(mi.load_dict(models.load_dict(truth)), name)
         assert result["brdf_error"] <= 1e-4, (config, result["parameters"])

@@ -1,10 +1,10 @@
 """What a fitted material means, beyond its raw parameters.
 
-:func:`parameters`: the colours that matter given the weights — a
-``cook_torrance`` shows k·m_D (its diffuse colour) and (1 - k)·m_S·F(θ) (its
-specular colour, Schlick's F at normal and at 85° incidence), not m_D when
-k = 0; phong, blinn and ward have no Fresnel, so their specular colour is m_S
-at every angle.
+:func:`parameters`: the colours that matter given the weights, as each
+model declares them (its ``effective``) — a ``cook_torrance`` shows k·m_D
+(its diffuse colour) and (1 - k)·m_S·F(θ) (its specular colour, Schlick's F
+at normal and at 85° incidence), not m_D when k = 0; phong, blinn and ward
+have no Fresnel, so their specular colour is m_S at every angle.
 
 :func:`albedo`: the directional albedo (the share of light from one
 direction that the surface reflects, per channel) at 0°, 60° and 85°, by the
@@ -31,6 +31,7 @@ import drjit as dr
 import mitsuba as mi
 
 from ..._jit import from_numpy
+from ...bsdfs import BY_NAME, cases
 from ..analysis import eval_at_viewer
 from .metric import pairs
 from .models import Model
@@ -46,43 +47,16 @@ CHROMA_MIN = 0.1                 # a specular colour this close to grey cannot w
 BODY_DEG = 30.0                  # the body colour is read from a light 30° off the normal, viewer's side
 
 
-def schlick(f0: float, cos_theta: float) -> float:
-    return f0 + (1.0 - f0) * (1.0 - cos_theta) ** 5
-
-
-def _colour(v) -> list[float]:
-    return [float(c) for c in (v if isinstance(v, (list, tuple)) else (v, v, v))]
-
-
-def _scale(c, s: float) -> list[float]:
-    return [x * s for x in _colour(c)]
-
-
 def parameters(plugin: str, p: dict) -> dict:
-    """The effective colours of fitted parameters ``p`` of ``plugin``: ``diffuse``
-    (or None where no diffuse lobe shows), ``specular_0`` and
+    """The effective colours of fitted parameters ``p`` of ``plugin``, as its
+    model declares them (:meth:`mi_brdfs.bsdfs.base.BRDF.effective`):
+    ``diffuse`` (or None where no diffuse lobe shows), ``specular_0`` and
     ``specular_85`` (the specular colour at normal and 85° incidence), and
     ``notes`` on parameters that do not matter."""
-    out: dict = {"diffuse": None, "specular_0": None, "specular_85": None, "notes": []}
-    grazing = math.cos(math.radians(GRAZING_DEG))
-    if plugin in ("lambert", "oren_nayar"):
-        out["diffuse"] = _colour(p["reflectance"])
-    elif plugin in ("phong", "blinn", "ward"):
-        out["diffuse"] = _colour(p["diffuse_reflectance"])
-        out["specular_0"] = out["specular_85"] = _colour(p["specular_reflectance"])
-    elif plugin == "cook_torrance":
-        k, f0 = float(p["k"]), float(p["f0"])
-        out["diffuse"] = _scale(p["diffuse_reflectance"], k)
-        out["specular_0"] = _scale(p["specular_reflectance"], (1.0 - k) * f0)
-        out["specular_85"] = _scale(p["specular_reflectance"], (1.0 - k) * schlick(f0, grazing))
-        if k < 1e-3:
-            out["notes"].append(f"k = {k:.2g}: diffuse_reflectance has no effect")
-        if k > 1.0 - 1e-3:
-            out["notes"].append(f"k = {k:.4g}: the specular lobe has no effect")
-    elif plugin == "toon":
-        out["diffuse"] = _colour(p["diffuse_reflectance"])
-        out["specular_0"] = out["specular_85"] = _colour(p["specular_reflectance"])
-    return out
+    model = BY_NAME[plugin]
+    normal, grazing = (model.effective(p, math.cos(math.radians(a))) for a in (0.0, GRAZING_DEG))
+    return {"diffuse": normal.diffuse, "specular_0": normal.specular,
+            "specular_85": grazing.specular, "notes": list(normal.notes)}
 
 
 def albedo(bsdf, angles=ALBEDO_ANGLES, samples: int = ALBEDO_SAMPLES, seed: int = 3) -> list:
@@ -192,21 +166,19 @@ def describe(found: dict) -> list[str]:
                    "colour keeps that colour at every angle)")
     a = found["anisotropy"]
     if a["present"]:
+        extra = [name for name, _ in cases.every("anisotropic")]
         out.append(f"it is anisotropic (eval changes by {a['change']:.2f} when both "
-                   "directions turn 90° about the normal); ward and cook_torrance have "
-                   "anisotropic roughness (fitted below as ward/anisotropic and "
-                   "cook_torrance/ggx/smith/anisotropic)")
+                   "directions turn 90° about the normal); the models with an anisotropic "
+                   f"roughness are fitted below as {' and '.join(extra)}")
     return out
 
 
 def extended_models(found: dict) -> list:
     """The course models' extended configurations worth fitting for the
-    features found: for an anisotropic target, ward and cook_torrance (GGX ×
-    Smith, without energy compensation: it has no anisotropic table) with
-    alpha_u and alpha_v."""
+    features found: for an anisotropic target, those the models declare
+    (their cases' ``anisotropic``: ward and cook_torrance with alpha_u and
+    alpha_v)."""
     if not found["anisotropy"]["present"]:
         return []
-    pair = (("alpha_u", 0.1), ("alpha_v", 0.1))
-    return [Model("ward/anisotropic", "ward", pair),
-            Model("cook_torrance/ggx/smith/anisotropic", "cook_torrance",
-                  (("distribution", "ggx"), ("geometry", "smith")) + pair)]
+    return [Model(name, plugin, tuple(props.items()))
+            for plugin, declared in cases.ALL.items() for name, props in declared.anisotropic]

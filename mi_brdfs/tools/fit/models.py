@@ -1,12 +1,13 @@
 """The course models a fit tries, and how each parameter is searched.
 
 **Models.** Every plugin of :data:`mi_brdfs.bsdfs.PLUGINS`, in hdr mode; a
-plugin with options that change the model itself (:data:`VARIANTS`: the D and
-G of ``cook_torrance``, the specular cosine of ``toon``) gives one model per
-combination, and a ``compensable`` plugin each of those with and without
-``energy_compensation`` (the name gets ``+ec``). Options that change only how
-a model is computed or sampled (``sampling``, ``sample_visible``, Ward's
-``formula``, Oren-Nayar's ``method``) keep their defaults. Names:
+plugin with options that change the model itself (those its declaration marks
+``model``: the D and G of ``cook_torrance``, the specular cosine of ``toon``)
+gives one model per combination, and a ``compensable`` plugin each of those
+with and without ``energy_compensation`` (the name gets ``+ec``). Options that
+change only how a model is computed or sampled (``sampling``,
+``sample_visible``, Ward's ``formula``, Oren-Nayar's ``method``) keep their
+defaults. Names:
 ``lambert``, ``phong+ec``, ``cook_torrance/ggx/smith``, ... (:func:`names`).
 
 **Parameters.** A model's free parameters are those its plugin exposes in
@@ -40,9 +41,6 @@ import numpy as np
 import drjit as dr
 
 from ...bsdfs import PLUGINS
-
-# Options that make different models (the others are computation choices).
-VARIANTS = {"cook_torrance": ("distribution", "geometry"), "toon": ("specular_model",)}
 EXPONENT_MAX = 1e6        # exponents are searched up to here (a mirror-like lobe)
 U_MAX = 30.0              # coordinates stay within ±U_MAX (σ(-30) = 1e-13; σ(u) rounds to 1 in float32 from u = 17)
 U_START = 6.0             # a start "at a bound" is u = ±6 (0.25 % of the range inside it)
@@ -65,9 +63,9 @@ class Model:
 def all_models() -> list[Model]:
     out = []
     for cls in PLUGINS:
-        choices = {o.name: o.choices for o in cls.all_options()}
-        names = VARIANTS.get(cls.name, ())
-        for combo in itertools.product(*(choices[n] for n in names)):
+        variants = [o for o in cls.OPTIONS if o.model]       # each choice another model
+        names = tuple(o.name for o in variants)
+        for combo in itertools.product(*(o.choices for o in variants)):
             base = "/".join((cls.name, *combo))
             opts = tuple(zip(names, combo))
             for ec in ((False, True) if cls.compensable else (False,)):
@@ -91,8 +89,9 @@ def select(wanted: list[str] | None) -> list[Model]:
     for w in wanted:
         found = [m for m in models if m.name == w] or [m for m in models if m.plugin == w]
         if not found:
+            several = sorted({m.plugin for m in models if m.name != m.plugin})
             raise ValueError(f"unknown model {w!r}; valid: "
-                             f"{', '.join(m.name for m in models)}, or cook_torrance, toon "
+                             f"{', '.join(m.name for m in models)}, or {', '.join(several)} "
                              "(all their models)")
         chosen += [m for m in found if m not in chosen]
     return chosen

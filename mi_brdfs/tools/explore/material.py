@@ -20,6 +20,8 @@ from __future__ import annotations
 import json
 import math
 
+import numpy as np
+
 MODES = ("hdr", "scanline")
 
 
@@ -138,16 +140,23 @@ def load_dict(models: dict[str, dict], material: dict) -> dict:
             for k, v in _loadable(models, material).items()}
 
 
+def short(value) -> str:
+    """A number as the shortest text that reads back as the same float32 (the
+    precision of the llvm_ad_rgb variant): what a user would type, "0.3" for
+    0.30000001192092896 or 0.2999999999972802."""
+    return str(np.float32(value))
+
+
 def xml(models: dict[str, dict], material: dict) -> str:
     """A complete material as a ``<bsdf>`` element ``mi.load_string`` loads
-    (numbers at full precision)."""
+    (numbers as :func:`short` writes them)."""
     kinds = {p["name"]: p["kind"] for p in models[material["type"]]["params"]}
     lines = [f'<bsdf type="{material["type"]}" version="3.0.0">']
     for k, v in _loadable(models, material).items():
         if k == "type":
             continue
         if kinds.get(k) == "spectrum":
-            lines.append(f'    <rgb name="{k}" value="{", ".join(repr(c) for c in _colour(v))}"/>')
+            lines.append(f'    <rgb name="{k}" value="{", ".join(short(c) for c in _colour(v))}"/>')
         elif isinstance(v, bool):
             lines.append(f'    <boolean name="{k}" value="{"true" if v else "false"}"/>')
         elif isinstance(v, int) and k not in kinds:
@@ -155,7 +164,7 @@ def xml(models: dict[str, dict], material: dict) -> str:
         elif isinstance(v, str):
             lines.append(f'    <string name="{k}" value="{v}"/>')
         else:
-            lines.append(f'    <float name="{k}" value="{float(v)!r}"/>')
+            lines.append(f'    <float name="{k}" value="{short(v)}"/>')
     return "\n".join(lines + ["</bsdf>"]) + "\n"
 
 
@@ -164,9 +173,9 @@ def python(models: dict[str, dict], material: dict) -> str:
     items = []
     for k, v in load_dict(models, material).items():
         if isinstance(v, dict):
-            text = '{"type": "rgb", "value": [' + ", ".join(repr(c) for c in v["value"]) + "]}"
+            text = '{"type": "rgb", "value": [' + ", ".join(short(c) for c in v["value"]) + "]}"
         elif isinstance(v, float):
-            text = repr(v)
+            text = short(v)
         else:
             text = json.dumps(v) if not isinstance(v, bool) else repr(v)
         items.append(f'    "{k}": {text},')

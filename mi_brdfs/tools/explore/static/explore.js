@@ -1,6 +1,9 @@
 // mi-brdfs explore: the page. Controls are generated from GET /api/models;
-// every change is sent over the websocket (plots, render, walk), and only the
-// newest answer of each kind is shown (the server drops superseded work too).
+// every change is sent over the websocket (plots, render, walk). Each column
+// keeps at most one request of each kind in flight: a change made meanwhile
+// is sent when the answer comes (the newest state only, never a queue), so
+// that a dragged slider's plots follow it at the speed the server answers.
+// Only the answer to the newest request of each kind is shown.
 "use strict";
 
 const CHANNELS = [["R", "#d62728"], ["G", "#2ca02c"], ["B", "#1f77b4"]];
@@ -51,6 +54,39 @@ function send(column, op, extra) {
   const id = page.nextId++;
   column.latest[op] = id;
   page.ws.send(JSON.stringify({op, id, side: column.side, ...extra}));
+  trace("sent", column, op, id);
+}
+
+// What each throttled operation sends: the column's state when it is sent.
+const REQUESTS = {
+  plots: column => ({material: column.material, theta_i: theta()}),
+  render: column => ({material: column.material, res: +document.getElementById("res").value}),
+  walk: column => ({material: column.material}),
+};
+
+// Ask for `op` with the column's current state: now if none of its kind is in
+// flight, else once the one in flight answers (a render: its first pass).
+function request(column, op) {
+  if (column.inflight[op]) {
+    column.wanted[op] = true;
+    return;
+  }
+  column.wanted[op] = false;
+  send(column, op, REQUESTS[op](column));
+  column.inflight[op] = column.latest[op];
+}
+
+function answered(column, op, id) {
+  if (column.inflight[op] !== id) return;
+  column.inflight[op] = null;
+  if (column.wanted[op]) request(column, op);
+}
+
+// Timings for a page that measures itself (mi_brdfs/tools/explore/latency.py):
+// an "explore" event on the document for every request sent and answer shown.
+function trace(what, column, op, id, extra) {
+  document.dispatchEvent(new CustomEvent("explore", {detail: {
+    what, side: column.side, op, id, t: performance.now(), ...extra}}));
 }
 
 function connect() {
@@ -70,6 +106,14 @@ function status(text) {
 function receive(msg) {
   const column = page.columns[msg.side];
   if (!column || msg.id !== column.latest[msg.op]) return;       // superseded
+  try {
+    show(column, msg);
+  } finally {
+    if (msg.op in REQUESTS) answered(column, msg.op, msg.id);
+  }
+}
+
+function show(column, msg) {
   if (msg.error) {
     if (msg.op === "fit") status("fit failed: " + msg.error);
     else if (msg.op !== "walk") column.el.querySelector(".error").textContent = msg.error;
@@ -80,13 +124,14 @@ function receive(msg) {
   else if (msg.op === "walk") { column.walk = msg.E ? msg : null; drawAlbedo(column); }
   else if (msg.op === "material") showCopied(column, msg);
   else if (msg.op === "fit") fitted(msg);
+  if (msg.op in REQUESTS) trace("shown", column, msg.op, msg.id, {spp: msg.spp});
 }
 
 // ---------------------------------------------------------------- a column
 function makeColumn(section, material, choices) {
   section.append(document.getElementById("column").content.cloneNode(true));
-  const column = {side: section.dataset.side, el: section, latest: {}, material: null,
-                  walk: null, plots: null, pending: false};
+  const column = {side: section.dataset.side, el: section, latest: {}, inflight: {},
+                  wanted: {}, material: null, walk: null, plots: null, pending: false};
   page.columns[column.side] = column;
   const select = section.querySelector(".model");
   for (const m of Object.values(page.models).filter(choices)) {
@@ -197,54 +242,86 @@ function change(column, name, value) {
   update(column);
 }
 
-// Coalesce changes to one message set per animation frame.
-function update(column) {
+// Coalesce changes to one request of each kind per animation frame.
+function update(column, ops = ["plots", "render", "walk"]) {
+  column.ops = new Set([...(column.ops ?? []), ...ops]);
   if (column.pending) return;
   column.pending = true;
   requestAnimationFrame(() => {
     column.pending = false;
-    const material = column.material;
-    column.el.querySelector(".preview").dataset.spp = "0";      // until the new render's first pass
-    send(column, "plots", {material, theta_i: theta()});
-    send(column, "render", {material, res: +document.getElementById("res").value});
-    send(column, "walk", {material});
+    const wanted = column.ops;
+    column.ops = null;
+    if (wanted.has("render")) column.el.querySelector(".preview").dataset.spp = "0";   // until the new render's first pass
+    for (const op of wanted) request(column, op);
   });
 }
 
 const theta = () => +document.getElementById("theta").value;
 
 // ---------------------------------------------------------------- the views
+// R, G and B differ in dash and width too: a grey material's three curves
+// coincide, and each stays visible.
+const LINES = [{dash: "solid", width: 3}, {dash: "dash", width: 2}, {dash: "dot", width: 1.5}];
+const RADIUS = "f·cos θo (1/sr)";
+
 function drawPlots(column, msg) {
   column.el.querySelector(".error").textContent = "";
   column.plots = msg;
-  const el = column.el;
+  column.lobeTop = Math.max(1e-6, ...msg.lobe.rgb.flat());
+  // both columns' lobes on one radial scale: they are compared side by side
+  const top = Math.max(...Object.values(page.columns).filter(c => c.plots).map(c => c.lobeTop));
+  for (const c of Object.values(page.columns)) {
+    if (c === column) drawLobe(c, top);
+    else if (c.plots && c.drawnTop !== top) drawLobe(c, top);
+  }
+  drawLobe3d(column, msg);
+  drawAlbedo(column);
+  column.el.dataset.plots = String(msg.id);
+}
+
+function drawLobe(column, top) {
   // the lobe: plotted angle 90° - θo puts the normal up and the mirror side right
+  const msg = column.plots;
+  column.drawnTop = top;
   const angle = msg.lobe.theta.map(t => 90 - t);
-  const top = Math.max(1e-6, ...msg.lobe.rgb.flat());
   const traces = msg.lobe.rgb.map((r, c) => ({type: "scatterpolar", mode: "lines", r, theta: angle,
-                                              name: CHANNELS[c][0], line: {color: CHANNELS[c][1], width: 1.5}}));
+                                              name: CHANNELS[c][0],
+                                              line: {color: CHANNELS[c][1], ...LINES[c]}}));
   traces.push({type: "scatterpolar", mode: "lines", r: [0, top], theta: [90 + msg.theta_i, 90 + msg.theta_i],
                name: "viewer", line: {color: "#888", dash: "dot"}});
-  Plotly.react(el.querySelector(".lobe"), traces, {
-    title: {text: "eval = f·cos θo in the plane of incidence", font: FONT},
-    font: FONT, margin: {l: 30, r: 30, t: 40, b: 10}, showlegend: true, legend: {orientation: "h"},
-    polar: {sector: [0, 180], radialaxis: {range: [0, top * 1.05]},
+  Plotly.react(column.el.querySelector(".lobe"), traces, {
+    title: {text: "eval = f·cos θo in the plane of incidence<br>radius: " + RADIUS
+                  + ", one scale for both columns", font: FONT},
+    font: FONT, margin: {l: 35, r: 35, t: 50, b: 10}, showlegend: true,
+    legend: {orientation: "h", x: 0.5, xanchor: "center", y: 0.02, yanchor: "bottom"},
+    polar: {sector: [0, 180], domain: {y: [0.14, 1]},
+            radialaxis: {range: [0, top * 1.05], angle: 0, tickangle: 0, nticks: 4,
+                         title: {text: "1/sr", font: FONT}},
             angularaxis: {tickvals: [0, 30, 60, 90, 120, 150, 180],
                           ticktext: ["90°", "60°", "30°", "0°", "-30°", "-60°", "-90°"]}},
   }, PLOT_CONFIG);
-  const v = msg.lobe3d, r = Math.max(1e-6, ...v.z.flat());
+}
+
+function drawLobe3d(column, msg) {
+  // A fixed box, the same for every lobe: [-R, R]² × [0, R] with R the
+  // largest radius (the lobe's or the viewer's arrow), seen from a fixed
+  // camera, so that no lobe however long or tilted leaves the panel.
+  const v = msg.lobe3d;
+  const flat = a => a.flat().map(Math.abs);
+  const r = Math.max(1e-6, ...flat(v.x), ...flat(v.y), ...flat(v.z));
   const t = msg.theta_i * Math.PI / 180;
-  Plotly.react(el.querySelector(".lobe3d"), [
+  const axis = (title, range) => ({title: {text: title}, range, autorange: false,
+                                   showticklabels: false, zeroline: false});
+  Plotly.react(column.el.querySelector(".lobe3d"), [
     {type: "surface", x: v.x, y: v.y, z: v.z, showscale: false, colorscale: "Viridis"},
     {type: "scatter3d", mode: "lines", x: [0, -Math.sin(t) * r], y: [0, 0], z: [0, Math.cos(t) * r],
      line: {color: "#444", width: 4}, name: "viewer"},
   ], {title: {text: "the lobe over the hemisphere (channel mean)", font: FONT}, font: FONT,
       margin: {l: 0, r: 0, t: 30, b: 0}, showlegend: false,
-      scene: {aspectmode: "data", camera: {eye: {x: 0.2, y: -1.8, z: 0.9}},
-              xaxis: {title: {text: "x"}}, yaxis: {title: {text: "y"}}, zaxis: {title: {text: "n"}}}},
+      scene: {aspectmode: "manual", aspectratio: {x: 1, y: 1, z: 0.5},
+              camera: {eye: {x: 0.25, y: -1.7, z: 0.8}, center: {x: 0, y: 0, z: -0.1}},
+              xaxis: axis("x", [-r, r]), yaxis: axis("y", [-r, r]), zaxis: axis("n", [0, r])}},
   PLOT_CONFIG);
-  drawAlbedo(column);
-  el.dataset.plots = String(msg.id);
 }
 
 function drawAlbedo(column) {
@@ -261,9 +338,10 @@ function drawAlbedo(column) {
   const title = f ? `white furnace: ${f.mean.toFixed(3)} (E up to ${f.max.toFixed(3)} at ${f.at}°)` : "";
   Plotly.react(column.el.querySelector(".albedo"), traces, {
     title: {text: "directional albedo E(θi)<br>" + title, font: FONT}, font: FONT,
-    margin: {l: 40, r: 10, t: 45, b: 35}, legend: {orientation: "h", y: -0.32},
-    xaxis: {title: {text: "θi (degrees)"}, range: [0, 90]},
-    yaxis: {rangemode: "tozero"},
+    margin: {l: 50, r: 10, t: 45, b: 40},
+    legend: {x: 1.02, xanchor: "left", y: 1, yanchor: "top"},        // beside the plot
+    xaxis: {title: {text: "θi (degrees)", standoff: 4}, range: [0, 90]},
+    yaxis: {title: {text: "E (fraction reflected)", standoff: 4}, rangemode: "tozero"},
   }, PLOT_CONFIG);
 }
 
@@ -306,7 +384,7 @@ async function main() {
   const slider = document.getElementById("theta");
   slider.oninput = () => {
     document.getElementById("theta-out").textContent = `${slider.value}°`;
-    for (const c of Object.values(page.columns)) send(c, "plots", {material: c.material, theta_i: theta()});
+    for (const c of Object.values(page.columns)) update(c, ["plots"]);
   };
   document.getElementById("res").onchange = () => Object.values(page.columns).forEach(update);
   document.getElementById("fit").onclick = () => {

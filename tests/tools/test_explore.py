@@ -242,8 +242,8 @@ def test_a_parameter_change_reuses_the_compiled_kernels(ex):
 
 def test_progressive_frames_refine_to_the_spp_asked(ex):
     frames = list(ex.frames({"type": "phong", "exponent": 50}, 128, 40))
-    assert [f["spp"] for f in frames] == [4, 8, 16, 32, 40]      # passes of 4, 4, 8, 16, 8
-    assert [f["final"] for f in frames] == [False] * 4 + [True]
+    assert [f["spp"] for f in frames] == [1, 4, 8, 16, 24, 32, 40]   # passes of 1, 3, 4, 8, 8, ...
+    assert [f["final"] for f in frames] == [False] * 6 + [True]
     assert all(f["image"].startswith("data:image/png;base64,") for f in frames)
     with pytest.raises(M.RequestError, match=r"res = 100 is invalid; valid: one of 128, 256"):
         ex.frames({"type": "phong"}, 100, 4)

@@ -1,7 +1,26 @@
-"""The explorer's latencies as its page sees them (the bench group ``explore``).
+"""The explorer's latencies (the bench group ``explore``).
 
-A server in a process of its own (``mi-brdfs explore --port 0``) and one
-websocket client that does what the page does, one request at a time:
+**What the page sees** (:func:`page_latency`, rows ``page: ...``): the page
+itself in the system's Chromium (headless, driven by Playwright, 1280 px
+wide; :mod:`.browser`), a server in a process of its own. A slider is moved
+as a user does, and every request a change sends (plots, render and walk,
+for the column, together) is timed from the slider's ``input`` event to the
+answer drawn, in the page's own clock (the page reports what it sends and
+shows as ``explore`` events on its document):
+
+- ``page: drag -> plots``, ``... -> first pass``, ``... -> walk``: a drag of
+  the left column's ``alpha`` slider, ``DRAG_MOVES`` moves ``DRAG_GAP_MS``
+  apart, the button held down: for each move, the time until the page shows
+  an answer to a request sent after it (the page keeps one request of each
+  kind in flight and sends the newest state when it answers);
+- ``page: change -> plots``, ``... -> first pass`` (the first pass of the
+  128² render), ``... -> walk``, ``... -> all``: single clicks on the
+  slider, each after the page has gone quiet; ``all`` is the last of the
+  three.
+
+**One request at a time** (:func:`measure`): one websocket client that does
+what the page does, waiting for each answer before the next request (the
+server's own speed, without the page or the other requests of a change):
 
 - ``startup``: from starting the process to its "serving" line;
 - ``first image``: the first preview pass (128², 4 spp) of a configuration
@@ -15,12 +34,15 @@ websocket client that does what the page does, one request at a time:
 """
 from __future__ import annotations
 
+import argparse
 import asyncio
 import json
+import os
 import statistics
+import sys
 import time
 
-from .browser import Server
+from .browser import Server, chromium, open_page
 
 CONFIGS = [
     ("cook_torrance ggx smith", {"type": "cook_torrance", "distribution": "ggx",
@@ -105,6 +127,131 @@ def measure(moves: int) -> list[dict]:
     return [_row("startup", "", [startup])] + rows
 
 
+# ----------------------------------------------------------------------------
+#  What the page sees
+# ----------------------------------------------------------------------------
+
+DRAG_MOVES = 20
+DRAG_GAP_MS = 30
+CHANGES = 8
+# (the row's name, the request sent, the view shown): the plots' answer draws
+# the lobe and the albedo at once, and the 3-D lobe at the next frame
+VIEWS = (("plots", "plots", "plots"), ("3-D lobe", "plots", "lobe3d"),
+         ("first pass", "render", "render"), ("walk", "walk", "walk"))
+PAGE_CONFIG = "cook_torrance ggx smith, page"
+PAGE_WIDTH = 1280
+
+RECORD = """() => {
+  const log = window.__latency = {events: [], moves: []};
+  document.addEventListener("explore", e => log.events.push(e.detail));
+  document.addEventListener("input", e => {          // before the page's own handler
+    const column = e.target.closest(".column");
+    log.moves.push({t: performance.now(), name: e.target.dataset.name ?? e.target.id,
+                    side: column ? column.dataset.side : null});
+  }, true);
+}"""
+
+# Quiet: every request of each kind and column sent has been answered, and
+# nothing is waiting to be sent.
+QUIET = """() => {
+  const log = window.__latency, last = {}, shown = new Set();
+  for (const e of log.events) {
+    const key = e.side + " " + e.op;
+    if (e.what === "sent") last[key] = e.id;
+    else shown.add(key + " " + e.id);
+  }
+  return Object.entries(last).every(([key, id]) => shown.has(key + " " + id)
+    && (!key.endsWith(" plots") || shown.has(key.replace(" plots", " lobe3d") + " " + id)));
+}"""
+
+
+def _answers(events: list[dict], side: str, op: str, view: str) -> list[tuple[float, float]]:
+    """(sent, first shown) in ms of each request of ``op`` from ``side`` whose
+    answer ``view`` showed."""
+    sent, shown = {}, {}
+    for e in events:
+        if e["side"] != side:
+            continue
+        if e["what"] == "sent" and e["op"] == op:
+            sent[e["id"]] = e["t"]
+        elif e["what"] == "shown" and e["op"] == view and e["id"] not in shown:
+            shown[e["id"]] = e["t"]
+    return [(sent[i], shown[i]) for i in shown if i in sent]
+
+
+def after_moves(moves: list[float], answers: list[tuple[float, float]]) -> list[float]:
+    """For each move (ms), the time until the first answer drawn to a request
+    sent after it: the move's value (or a later one) on the screen."""
+    out = []
+    for m in moves:
+        waits = [shown - m for sent, shown in answers if sent >= m]
+        if waits:
+            out.append(min(waits))
+    return out
+
+
+def _settle(page, timeout_ms: float = 120_000) -> None:
+    page.wait_for_timeout(100)                   # a change's requests leave at the next frame
+    page.wait_for_function(QUIET, timeout=timeout_ms)
+
+
+def _log(page) -> tuple[list[dict], list[dict]]:
+    log = page.evaluate("() => { const l = window.__latency; const out = [l.events, l.moves]; "
+                        "l.events = []; l.moves = []; return out; }")
+    return log[0], [m for m in log[1] if m["side"] == "left" and m["name"] == "alpha"]
+
+
+def _rows(kind: str, moves: list[dict], events: list[dict]) -> list[dict]:
+    times = [m["t"] for m in moves]
+    rows, every = [], []
+    for label, op, view in VIEWS:
+        waits = after_moves(times, _answers(events, "left", op, view))
+        if waits:
+            rows.append(_row(f"page: {kind} -> {label}", PAGE_CONFIG, [w / 1000 for w in waits]))
+            every.append(waits)
+    if kind == "change" and len(every) == len(VIEWS):
+        rows.append(_row("page: change -> all", PAGE_CONFIG,
+                         [max(w) / 1000 for w in zip(*every)]))
+    return rows
+
+
+def page_latency(drag_moves: int = DRAG_MOVES, changes: int = CHANGES) -> list[dict]:
+    """What the page sees (the module's docstring), with the load average
+    of the machine at the start in each row (``load``)."""
+    load = os.getloadavg()[0]
+    with Server() as server, chromium(permissions=()) as context:
+        page = open_page(context, server.url)
+        page.set_viewport_size({"width": PAGE_WIDTH, "height": 1000})
+        page.evaluate(RECORD)
+        _settle(page)
+        _log(page)
+        box = page.locator(".column[data-side=left] input[type=range][data-name=alpha]") \
+            .bounding_box()
+        y = box["y"] + box["height"] / 2
+        at = lambda f: box["x"] + box["width"] * f                      # noqa: E731
+        rows = []
+        # single changes, each after the page has gone quiet
+        for i in range(changes):
+            page.mouse.click(at(0.15 + 0.6 * i / max(changes - 1, 1)), y)
+            _settle(page)
+        events, moves = _log(page)
+        rows += _rows("change", moves, events)
+        # a drag: the button held, a move every DRAG_GAP_MS
+        page.mouse.move(at(0.15), y)
+        page.mouse.down()
+        for i in range(drag_moves):
+            page.mouse.move(at(0.15 + 0.6 * (i + 1) / drag_moves), y)
+            page.wait_for_timeout(DRAG_GAP_MS)
+        page.mouse.up()
+        _settle(page)
+        events, moves = _log(page)
+        rows += _rows("drag", moves, events)
+    if server.returncode != 0:
+        raise RuntimeError(f"explore: the server ended with status {server.returncode}: "
+                           f"{server.stderr[-2000:]}")
+    return [{**r, "load": round(load, 1)} for r in rows]
+
+
 def finding(rows: list[dict]) -> str:
     """The slowest configuration's medians against the issue's budgets."""
     def worst(measure: str, key: str = "median_ms") -> dict:
@@ -118,3 +265,25 @@ def finding(rows: list[dict]) -> str:
             f"re-render's first pass after a change in {again['median_ms']:.0f} ms "
             f"(median, {again['config']}). The server starts in "
             f"{startup['median_ms'] / 1000:.1f} s.")
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(prog="python -m mi_brdfs.tools.explore.latency",
+                                description="the explorer's latencies: what the page sees "
+                                            "in Chromium, and one request at a time")
+    p.add_argument("--page-only", action="store_true", help="only what the page sees")
+    p.add_argument("--moves", type=int, default=DRAG_MOVES, help="moves of the drag")
+    args = p.parse_args(argv)
+    print(f"load average {' '.join(f'{x:.2f}' for x in os.getloadavg())}, "
+          f"{os.cpu_count()} cores")
+    rows = page_latency(args.moves)
+    if not args.page_only:
+        rows += measure(args.moves)
+    for r in rows:
+        print(f"{r['measure']:<28} {r['config']:<32} n={r['n']:<3} "
+              f"median {r['median_ms']:7.1f} ms  max {r['max_ms']:7.1f} ms")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

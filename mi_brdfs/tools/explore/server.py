@@ -316,7 +316,7 @@ def run(host: str, port: int, browser: bool, prog: str = "mi-brdfs explore") -> 
 
 async def serve(host: str, port: int, browser: bool, prog: str = "mi-brdfs explore") -> int:
     """Serve until SIGINT or SIGTERM; 0 after a clean stop."""
-    jit, walker = Worker("explore-jit"), Worker("explore-walk")
+    jit, walker = Worker("explore-jit", urgent=("plots", "material")), Worker("explore-walk")
     try:
         explorer = jit.call(Explorer)
         runner = web.AppRunner(make_app(explorer, jit, walker, host), shutdown_timeout=2.0,

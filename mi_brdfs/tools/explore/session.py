@@ -37,8 +37,9 @@ GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
 LOBE_POINTS = 181                                # the plane of incidence, -90° .. 90°
 HEMISPHERE_N = 30                                # the 3-D lobe: n × 4n directions
 RESOLUTIONS = (128, 256)
-PASSES = (4, 4, 8, 16)            # spp of the first passes, then 16 each (a pass runs to its
-#                                   end: a newer request waits for at most one)
+PASSES = (1, 3, 4, 8)             # spp of the first passes, then 8 each: a quick first
+#                                   image, and a pass runs to its end (the plots a slider
+#                                   asks for wait for the pass running, never longer)
 MAX_SPP = 256                                    # a preview stops refining here
 CACHE = 12                                       # loaded configurations kept
 WALK_PATHS = 8000                                # random-walk paths per angle

@@ -6,8 +6,9 @@ operation) for the websocket, a slot of its own for each HTTP request — and
 a slot holds one job: a newer job replaces a queued one, and a running one
 is abandoned at its next step. A job is a function that returns a result,
 or a generator of results (the passes of a progressive render): after each
-step the job goes to the back of the queue, so that a slider's plots never
-wait for more than one render pass. Every result is handed to the job's
+step the job goes to the back of the queue, and a job of an *urgent*
+operation (the plots a slider asks for) is taken before any other that
+waits, so that a slider's plots wait for no more than the pass running. Every result is handed to the job's
 ``deliver(result, error, done)`` on the worker's thread; ``error`` is a
 one-line message. An idle worker waits on a condition: no CPU.
 """
@@ -31,7 +32,8 @@ class Job:
 class Worker:
     """A thread running jobs by slot, the newest job of each slot only."""
 
-    def __init__(self, name: str):
+    def __init__(self, name: str, urgent: tuple = ()):
+        self.urgent = frozenset(urgent)       # operations (a slot's last item) taken first
         self._lock = threading.Condition()
         self._queue: OrderedDict[object, Job] = OrderedDict()   # runnable, oldest first
         self._newest: dict[object, Job] = {}                    # each slot's job
@@ -84,6 +86,9 @@ class Worker:
                 self._lock.wait()
             if self._stopping:
                 return None
+            slot = next((s for s in self._queue if s[-1] in self.urgent), None)
+            if slot is not None:
+                return self._queue.pop(slot)
             return self._queue.popitem(last=False)[1]
 
     def _run(self) -> None:

@@ -106,11 +106,10 @@ function status(text) {
 function receive(msg) {
   const column = page.columns[msg.side];
   if (!column || msg.id !== column.latest[msg.op]) return;       // superseded
-  try {
-    show(column, msg);
-  } finally {
-    if (msg.op in REQUESTS) answered(column, msg.op, msg.id);
-  }
+  msg.received = performance.now();
+  // the next request first: the server computes it while this answer is drawn
+  if (msg.op in REQUESTS) answered(column, msg.op, msg.id);
+  show(column, msg);
 }
 
 function show(column, msg) {
@@ -124,7 +123,7 @@ function show(column, msg) {
   else if (msg.op === "walk") { column.walk = msg.E ? msg : null; drawAlbedo(column); }
   else if (msg.op === "material") showCopied(column, msg);
   else if (msg.op === "fit") fitted(msg);
-  if (msg.op in REQUESTS) trace("shown", column, msg.op, msg.id, {spp: msg.spp});
+  if (msg.op in REQUESTS) trace("shown", column, msg.op, msg.id, {spp: msg.spp, received: msg.received});
 }
 
 // ---------------------------------------------------------------- a column
@@ -210,8 +209,9 @@ function buildParams(column, model) {
       control.oninput = () => {
         const rgb = rgbOf(control.value);
         text.value = shown(rgb);
-        change(column, p.name, rgb);
+        change(column, p.name, rgb, MOVING);
       };
+      control.onchange = () => update(column, ["walk"]);
       text.onchange = () => {
         const v = parsed(text.value, true);
         if (Array.isArray(v) || typeof v === "number") control.value = hexOf(Array.isArray(v) ? v : [v, v, v]);
@@ -224,8 +224,9 @@ function buildParams(column, model) {
       control.oninput = () => {
         const v = +s.toValue(+control.value).toPrecision(4);
         text.value = shown(v);
-        change(column, p.name, v);
+        change(column, p.name, v, MOVING);
       };
+      control.onchange = () => update(column, ["walk"]);      // released
       text.onchange = () => {
         const v = parsed(text.value, false);
         if (typeof v === "number") control.value = s.toSlider(v);
@@ -237,9 +238,14 @@ function buildParams(column, model) {
   }
 }
 
-function change(column, name, value) {
+// While a slider or a colour picker moves, the plots and the render follow
+// it; the random walk (a second or so of NumPy on the server's other thread,
+// taking CPU from the plots) waits until it is released.
+const MOVING = ["plots", "render"];
+
+function change(column, name, value, ops) {
   column.material[name] = value;
-  update(column);
+  update(column, ops);
 }
 
 // Coalesce changes to one request of each kind per animation frame.
@@ -274,9 +280,22 @@ function drawPlots(column, msg) {
     if (c === column) drawLobe(c, top);
     else if (c.plots && c.drawnTop !== top) drawLobe(c, top);
   }
-  drawLobe3d(column, msg);
   drawAlbedo(column);
   column.el.dataset.plots = String(msg.id);
+  // The 3-D lobe (WebGL, in software on a machine without a GPU: the slowest
+  // view by far) at the next frame, the newest only: it never holds up the
+  // other views or the next answer.
+  column.lobe3dWanted = msg;
+  if (!column.lobe3dPending) {
+    column.lobe3dPending = true;
+    requestAnimationFrame(() => setTimeout(() => {
+      column.lobe3dPending = false;
+      const newest = column.lobe3dWanted;
+      drawLobe3d(column, newest);
+      column.el.dataset.lobe3d = String(newest.id);
+      trace("shown", column, "lobe3d", newest.id, {received: newest.received});
+    }));
+  }
 }
 
 function drawLobe(column, top) {

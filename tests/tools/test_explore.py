@@ -154,6 +154,18 @@ def test_copy_xml_and_python_load_as_written_and_mean_the_material(ex, name):
         assert f'name="{key}" value="{text}"' in strings["xml"], key
 
 
+def test_copied_numbers_are_the_shortest_that_read_back_as_the_float32(ex):
+    """A value that went through float32 (0.30000001192092896) or a slider's
+    arithmetic is written as a user would type it, in the XML and the Python."""
+    material = M.complete(ex.models, {"type": "cook_torrance", "alpha": 0.30000001192092896,
+                                      "diffuse_reflectance": [0.9999999999972802, 1 / 3, 0.05]})
+    strings = ex.strings(material)
+    assert '<float name="alpha" value="0.3"/>' in strings["xml"]
+    assert '<rgb name="diffuse_reflectance" value="1.0, 0.33333334, 0.05"/>' in strings["xml"]
+    assert '"alpha": 0.3,' in strings["python"]
+    assert '"value": [1.0, 0.33333334, 0.05]' in strings["python"]
+
+
 # ----------------------------------------------------------------------------
 #  The views, against NumPy and physics
 # ----------------------------------------------------------------------------

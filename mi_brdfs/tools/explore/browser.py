@@ -105,10 +105,12 @@ def chromium(permissions: tuple[str, ...] = ("clipboard-read", "clipboard-write"
             context.close()
 
 
-def open_page(context, url: str, timeout_ms: float = 60_000):
+def open_page(context, url: str, timeout_ms: float = 60_000, width: int | None = None):
     """The explorer's page, once both columns have drawn their plots and a
-    preview image."""
+    preview image; ``width``: the window's, if not the context's."""
     page = context.new_page()
+    if width:
+        page.set_viewport_size({"width": width, "height": VIEWPORT["height"]})
     page.goto(url)
     for side in ("left", "right"):
         page.wait_for_selector(f".column[data-side={side}][data-plots]", timeout=timeout_ms)

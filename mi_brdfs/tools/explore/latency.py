@@ -220,8 +220,7 @@ def page_latency(drag_moves: int = DRAG_MOVES, changes: int = CHANGES) -> list[d
     of the machine at the start in each row (``load``)."""
     load = os.getloadavg()[0]
     with Server() as server, chromium(permissions=()) as context:
-        page = open_page(context, server.url)
-        page.set_viewport_size({"width": PAGE_WIDTH, "height": 1000})
+        page = open_page(context, server.url, width=PAGE_WIDTH)
         page.evaluate(RECORD)
         _settle(page)
         _log(page)

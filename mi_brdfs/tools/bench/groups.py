@@ -222,12 +222,15 @@ def energy(s: Settings, refs: References) -> list[dict]:
 # ----------------------------------------------------------------------------
 
 def explore(s: Settings, refs: References) -> list[dict]:
-    """mi-brdfs explore as its page sees it (a server process, one websocket
-    client; tools/explore/latency.py): start-up, a configuration's first
-    128² image, slider -> plot data (the page's 100 ms budget), re-render to
-    the first pass and to 256 spp after a change, and a fit; medians and
-    maxima over the slider moves."""
-    return latency.measure(moves=20 if s is FULL else 3)
+    """mi-brdfs explore as its page sees it (tools/explore/latency.py): rows
+    ``page: ...``, the page in Chromium, a drag and single changes, every
+    request of a change timed together from the slider's input event to the
+    view drawn (the load average in ``load``); then one websocket client, one
+    request at a time: start-up, a configuration's first 128² image, slider
+    -> plot data, re-render to the first pass and to 256 spp, and a fit;
+    medians and maxima over the moves."""
+    full = s is FULL
+    return latency.both(drag_moves=20 if full else 5, moves=20 if full else 3)
 
 
 def explore_finding(rows: list[dict]) -> str:

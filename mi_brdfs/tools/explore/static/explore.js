@@ -65,9 +65,11 @@ const REQUESTS = {
 };
 
 // Ask for `op` with the column's current state: now if none of its kind is in
-// flight, else once the one in flight answers (a render: its first pass).
+// flight, else once the one in flight answers (a render: its first pass). The
+// walk (NumPy on the server's other thread, a second or so) also waits for
+// the plots and the render's first pass: it would take CPU from them.
 function request(column, op) {
-  if (column.inflight[op]) {
+  if (column.inflight[op] || (op === "walk" && (column.inflight.plots || column.inflight.render))) {
     column.wanted[op] = true;
     return;
   }
@@ -80,6 +82,7 @@ function answered(column, op, id) {
   if (column.inflight[op] !== id) return;
   column.inflight[op] = null;
   if (column.wanted[op]) request(column, op);
+  if (op !== "walk" && column.wanted.walk) request(column, "walk");
 }
 
 // Timings for a page that measures itself (mi_brdfs/tools/explore/latency.py):

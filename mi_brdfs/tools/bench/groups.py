@@ -230,7 +230,8 @@ def explore(s: Settings, refs: References) -> list[dict]:
     -> plot data, re-render to the first pass and to 256 spp, and a fit;
     medians and maxima over the moves."""
     full = s is FULL
-    return latency.both(drag_moves=20 if full else 5, moves=20 if full else 3)
+    return latency.both(drag_moves=20 if full else 5, moves=20 if full else 3,
+                        changes=8 if full else 2)
 
 
 def explore_finding(rows: list[dict]) -> str:

@@ -129,10 +129,22 @@ def screenshot(target, path: str) -> None:
         target.screenshot(path=tmp)
 
 
-def screenshots(out_dir: str) -> list[str]:
-    """The documentation's screenshots: the page as it opens (cook_torrance
-    beside Mitsuba's gold roughconductor), after "Fit left to right", and the
-    left column in scan-line mode with a Phong model."""
+# A drag as the slider reports it: an ``input`` event every 30 ms, the
+# button held (no ``change``), the value swept to and fro.
+DRAG = """() => { const s = document.querySelector(
+      '.column[data-side=left] input[type=range][data-name=alpha]');
+  let i = 0;
+  window.__drag = setInterval(() => {
+    s.value = 100 + 40 * Math.abs((i++ % 20) - 10);
+    s.dispatchEvent(new Event('input', {bubbles: true}));
+  }, 30); }"""
+
+
+def screenshots(out_dir: str, width: int = 1280) -> list[str]:
+    """The documentation's screenshots, in a window ``width`` px wide: the
+    page as it opens (cook_torrance beside Mitsuba's gold roughconductor),
+    in the middle of a drag of the left ``alpha`` slider, after "Fit left to
+    right", and the left column in scan-line mode with a Phong model."""
     os.makedirs(out_dir, exist_ok=True)
     written = []
 
@@ -140,22 +152,29 @@ def screenshots(out_dir: str) -> list[str]:
         path = os.path.join(out_dir, name)
         screenshot(target, path)
         written.append(path)
+    preview_done = ("document.querySelector('.column[data-side=left] .preview')"
+                    ".dataset.spp >= 64")
     with Server() as server, chromium() as context:
-        page = open_page(context, server.url)
+        page = open_page(context, server.url, width=width)
         save(page, "page.png")
+        drawn = column(page, "left").get_attribute("data-plots")
+        page.evaluate(DRAG)
+        page.wait_for_function("(n => document.querySelector('.column[data-side=left]')"
+                               ".dataset.plots - n >= 20)", arg=int(drawn), timeout=120_000)
+        save(page, "drag.png")                     # still moving
+        page.evaluate("clearInterval(window.__drag)")
+        page.wait_for_function(preview_done, timeout=60_000)
         page.click("#fit")
         page.wait_for_function("document.getElementById('status').textContent"
                                ".startsWith('fitted')", timeout=120_000)
-        page.wait_for_function("document.querySelector('.column[data-side=left] .preview')"
-                               ".dataset.spp >= 64", timeout=60_000)
+        page.wait_for_function(preview_done, timeout=60_000)
         save(page, "fit.png")
         left = column(page, "left")
         left.locator("select.model").select_option("phong")
         left.locator("select.mode").select_option("scanline")
         page.wait_for_function("document.querySelector('.column[data-side=left] .title')"
                                ".textContent.startsWith('phong')")
-        page.wait_for_function("document.querySelector('.column[data-side=left] .preview')"
-                               ".dataset.spp >= 64", timeout=60_000)
+        page.wait_for_function(preview_done, timeout=60_000)
         save(left, "scanline.png")
     return written
 

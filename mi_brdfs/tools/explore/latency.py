@@ -261,9 +261,9 @@ def page_available() -> bool:
     return True
 
 
-def both(drag_moves: int, moves: int) -> list[dict]:
+def both(drag_moves: int, moves: int, changes: int = CHANGES) -> list[dict]:
     """What the page sees (if a browser is there), then one request at a time."""
-    return (page_latency(drag_moves) if page_available() else []) + measure(moves)
+    return (page_latency(drag_moves, changes) if page_available() else []) + measure(moves)
 
 
 def finding(rows: list[dict]) -> str:

@@ -360,8 +360,10 @@ function drawAlbedo(column) {
   const title = f ? `white furnace: ${f.mean.toFixed(3)} (E up to ${f.max.toFixed(3)} at ${f.at}°)` : "";
   Plotly.react(column.el.querySelector(".albedo"), traces, {
     title: {text: "directional albedo E(θi)<br>" + title, font: FONT}, font: FONT,
-    margin: {l: 50, r: 10, t: 45, b: 40},
-    legend: {x: 1.02, xanchor: "left", y: 1, yanchor: "top"},        // beside the plot
+    // the legend at the foot of the panel, under the axis title: never over it
+    margin: {l: 50, r: 10, t: 45, b: 40 + 19 * traces.length},
+    legend: {orientation: "h", x: 0, xanchor: "left", yref: "container", y: 0, yanchor: "bottom",
+             font: {size: 10}},
     xaxis: {title: {text: "θi (degrees)", standoff: 4}, range: [0, 90]},
     yaxis: {title: {text: "E (fraction reflected)", standoff: 4}, rangemode: "tozero"},
   }, PLOT_CONFIG);

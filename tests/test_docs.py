@@ -493,3 +493,11 @@ def test_validation_report_on_the_site_links_back(site):
     page = read(site, "reports/validation/index.html")
     assert "href='../../results/validation.html'" in page and "href='../../index.html'" in page
     assert "<nav class='contents'>" in page
+
+
+def test_energy_guide_reads_as_a_guide(site):
+    """No test function names, no e-notation (1e-39: 10⁻³⁹), no "this
+    machine" in the energy guide's prose."""
+    text = prose(read(site, "guide/energy.html"))
+    assert re.findall(r"\btest_\w+", text) == [] and E_NOTATION.findall(text) == []
+    assert "this 2-core machine" not in text

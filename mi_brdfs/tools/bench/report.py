@@ -188,6 +188,31 @@ def trade(rows: list[dict]) -> str | None:
 #  The files
 # ----------------------------------------------------------------------------
 
+# A group's section title (the group's name, what --only takes, beside it)
+TITLES = {
+    "builtin": "Plugins against Mitsuba's built-ins",
+    "models": "Render time of every model",
+    "oren_nayar": "Oren-Nayar: the table against the exact formulas",
+    "sampling": "Sampling strategies: error at equal time",
+    "integrators": "Integrators against a converged reference",
+    "convergence": "Error against samples per pixel",
+    "scaling": "Render time against resolution and lights",
+    "lobes": "A lobe switched off costs nothing",
+    "energy": "What energy compensation costs",
+    "materials": "Many materials in one scene",
+    "frozen": "Frozen passes",
+    "kernels": "The BSDF methods' kernels",
+    "tracing": "Tracing one call of each method",
+    "explore": "The explorer's latency",
+    "trade": "Which model for which material",
+}
+
+
+def title(group: str) -> str:
+    """A group's section title, e.g. "Frozen passes (``frozen``)"."""
+    return f"{TITLES[group]} (`{group}`)" if group in TITLES else group
+
+
 # A table's column header: the key's words as a reader says them, its unit in
 # brackets. HEADERS names the columns whose key alone does not say what they
 # hold; every other key is read word by word (WORDS), its suffix the unit.
@@ -273,7 +298,7 @@ def markdown(results: dict, about: dict[str, str], images: str = "") -> str:
         # every row's keys, in order (a row may lack some: e.g. no floor beside it)
         keys = [k for k in dict.fromkeys(k for r in rows for k in r)
                 if not any(isinstance(r.get(k), list) for r in rows)]
-        lines += [f"## {group}", ""]
+        lines += [f"## {title(group)}", ""]
         if about.get(group):
             lines += [about[group], ""]
         lines += ["| " + " | ".join(header(k) for k in keys) + " |", "|" + "---|" * len(keys)]

@@ -220,11 +220,10 @@ def notes(cls, pictures) -> list[str]:
              "variants it is a depolarizer, as Mitsuba's ``diffuse``.",
              "- **Differentiable**: every parameter marked ∂ is exposed by ``mi.traverse`` "
              "and can be updated and differentiated; options are fixed at load time."]
-    for sweep in pictures:
-        param = next((p for p in cls.PARAMS if p.name == sweep.parameter), None)
-        if param is not None:
-            lines.append(f"- **{sweep.parameter}**, varied in the renders below: "
-                         + human(" ".join(param.doc.split()), constants_of(cls)))
+    varied = [s.parameter for s in pictures if any(p.name == s.parameter for p in cls.PARAMS)]
+    if varied:                          # what they mean is the table's: not repeated here
+        lines.append("- **Renders**: " + " and ".join(f"``{v}``" for v in varied)
+                     + " vary in the renders below (see the table for what each means).")
     return lines + [""]
 
 

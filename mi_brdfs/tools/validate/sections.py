@@ -357,8 +357,8 @@ def negative_section(size: Settings, negatives: dict, count: int) -> list[dict]:
 
 # What a lobe plot's radius is: eval's value, f·cos θ_o; a BRDF in hdr mode
 # (per steradian), the lecture's shading value in scan-line mode (no 1/π).
-LOBE_RADIUS = {"hdr": "radius: f·cos θ_o (1/sr)",
-               "scanline": "radius: f·cos θ_o (the lecture's value, no unit)"}
+LOBE_RADIUS = {"hdr": r"radius: $f\,\cos\theta_o$ (1/sr)",
+               "scanline": r"radius: $f\,\cos\theta_o$ (the lecture's value, no unit)"}
 
 
 def lobe_section(out: str, models: dict, angles=(0, 30, 60, 80)) -> list[dict]:

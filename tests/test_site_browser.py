@@ -2,9 +2,9 @@
 Chromium at 1280 px with the network off, as a reader sees it: nothing leaves
 the machine, no image is missing, the page is no wider than the window and
 nothing is cut at the column's edge (a wide table or code block scrolls in a
-box of its own, a plain-text formula needs no scroll bar), no raw Sphinx role (``:func:`x```) or LaTeX escape (``\\_``)
-shows as text, and every page whose source holds maths has it typeset by the
-site's own MathJax.
+box of its own, a plain-text formula needs no scroll bar), no raw Sphinx role
+(``:func:`x```) or LaTeX escape (``\\_``) shows as text, and every page
+whose source holds maths has it typeset by the site's own MathJax.
 
 The browser is the system's Chromium (Debian's ``chromium``) driven by
 Playwright through ``executable_path`` (mi_brdfs/tools/explore/browser.py):
@@ -39,8 +39,9 @@ MEASURE = r"""() => {
     const column = document.querySelector('article') || document.body;
     const right = column.getBoundingClientRect().right;
     const cut = [];
-    for (const el of column.querySelectorAll(
-            'p, li, pre, table, th, td, img, figure, svg, div.math, mjx-container, div.highlight')) {
+    const parts = 'p, li, pre, table, th, td, img, figure, svg, div.math, mjx-container, '
+                  + 'div.highlight';
+    for (const el of column.querySelectorAll(parts)) {
         const style = getComputedStyle(el);
         if (['hidden', 'clip'].includes(style.overflowX) && el.scrollWidth > el.clientWidth + 1)
             cut.push('clipped ' + el.tagName + ': ' + el.textContent.trim().slice(0, 50));

@@ -20,7 +20,7 @@ nav.contents ol { margin: 0.3em 0; padding-left: 1.4em; }
 th { background: #f0f2f5; }
 td, th { vertical-align: top; }
 td:first-child, td:nth-child(2) { text-align: left; }
-table.summary td { text-align: left; }
+table.summary td, table.summary th { text-align: left; }
 figure img { border: 1px solid #eee; }
 """
 
@@ -198,7 +198,7 @@ def html_page(results: dict) -> str:
                 for i, section in enumerate(SECTIONS_HTML, 1)]
     contents = ("<nav class='contents'><b>Contents</b><ol>"
                 "<li><a href='#summary'>Summary</a></li>"
-                + "".join(f"<li><a href='#section-{i}'>{heading.split('. ', 1)[-1]}</a></li>"
+                + "".join(f"<li><a href='#section-{i}'>{heading.split('. ', 1)[-1].split(' (')[0]}</a></li>"
                           for i, (_, heading) in enumerate(sections, 1))
                 + "</ol></nav>")
     body = (f"<p>{esc(results['size'])} run, {results['seconds']:.0f} s; Mitsuba "

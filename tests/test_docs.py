@@ -496,8 +496,11 @@ def test_validation_report_on_the_site_links_back(site):
 
 
 def test_energy_guide_reads_as_a_guide(site):
-    """No test function names, no e-notation (1e-39: 10⁻³⁹), no "this
-    machine" in the energy guide's prose."""
-    text = prose(read(site, "guide/energy.html"))
+    """Figures of what it says (the walk against compensation, from the
+    validation report); no test function names, no e-notation (1e-39:
+    10⁻³⁹), no "this machine" in the energy guide's prose."""
+    page = read(site, "guide/energy.html")
+    assert all(f"groundtruth_{name}.png" in page for name in ("ggx_smith", "slices"))
+    text = prose(page)
     assert re.findall(r"\btest_\w+", text) == [] and E_NOTATION.findall(text) == []
     assert "this 2-core machine" not in text

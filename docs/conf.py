@@ -48,3 +48,9 @@ nitpicky = False
 html_theme = "furo"
 html_title = "mi_brdfs"
 html_static_path = ["_static"]
+
+# ``\text{brdf\_error}`` reads "brdf_error": MathJax's textmacros (shipped
+# with the offline copy, loaded from the site like the rest of MathJax) lets
+# text inside a formula take LaTeX's text-mode escapes.
+mathjax3_config = {"loader": {"load": ["[tex]/textmacros"]},
+                   "tex": {"packages": {"[+]": ["textmacros"]}}}

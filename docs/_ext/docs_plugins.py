@@ -9,7 +9,9 @@ its lobe plot (from the committed validation report) and its bundled scene.
 from __future__ import annotations
 
 import inspect
+import math
 import os
+import re
 import textwrap
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -28,16 +30,85 @@ MITSUBA_DOCS = "https://mitsuba.readthedocs.io/en/stable/src/generated/plugins_b
 #  The parameter table, from the declarations
 # ----------------------------------------------------------------------------
 
+SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
+SCIENTIFIC = re.compile(r"(?<![\w.])(\d+(?:\.\d+)?)e([+-]?\d+)(?![\w.])")
+NUMBER = r"-?\d+(?:\.\d+)?(?:e[+-]?\d+)?"
+CONSTANT = r"``(?:\w+\.)*([A-Z][A-Z0-9]*_[A-Z0-9_]*[A-Z0-9])``"
+
+
+def number(value: float) -> str:
+    """A number as a reader writes it: 10⁶ for 1e6, 5.1 × 10⁻⁶, π/2, 0.3."""
+    if abs(value - math.pi / 2) < 1e-12:
+        return "π/2"
+    if value > 0 and abs(round(math.log10(value))) >= 4 and \
+            math.isclose(value, 10.0 ** round(math.log10(value)), rel_tol=1e-12):
+        return "10" + str(round(math.log10(value))).translate(SUPERSCRIPT)
+    text = f"{value:g}"
+    return SCIENTIFIC.sub(_power, text) if "e" in text else text
+
+
+def _power(match: re.Match) -> str:
+    mantissa, exponent = match.group(1), str(int(match.group(2))).translate(SUPERSCRIPT)
+    return f"10{exponent}" if mantissa == "1" else f"{mantissa} × 10{exponent}"
+
+
+def human(text: str, constants: dict[str, float] = {}) -> str:   # noqa: B006 (read only)
+    """A declaration's or a docstring's prose for the page: the code's
+    constant names (``ALPHA_MIN`` = 1e-4, ``phong.MAX_EXPONENT``) give way to
+    their values, and numbers in e-notation read 10⁻⁴ (code literals and
+    blocks are left as they are)."""
+    return _powers(unname(text, constants))
+
+
+def _powers(prose: str) -> str:
+    parts = re.split(r"(``.*?``)", prose)                         # outside literals only
+    return "".join(p if p.startswith("``") else SCIENTIFIC.sub(_power, p) for p in parts)
+
+
+def human_docstring(doc: str, constants: dict[str, float]) -> str:
+    """:func:`human` for a module docstring (reStructuredText): its prose
+    lines only, never a directive's or a literal block's content."""
+    lines, block = [], None             # block: the indent a block's content exceeds
+    for line in unname(doc, constants).splitlines():
+        indent = len(line) - len(line.lstrip())
+        if block is not None and (not line.strip() or indent > block):
+            lines.append(line)
+            continue
+        block = None
+        lines.append(_powers(line))
+        if line.rstrip().endswith("::") or line.lstrip().startswith(".. "):
+            block = indent
+    return "\n".join(lines)
+
+
+def unname(text: str, constants: dict[str, float]) -> str:
+    """The code's constant names in ``text`` replaced by their values."""
+    text = re.sub(rf"{CONSTANT} = ({NUMBER})", lambda m: number(float(m.group(2))), text)
+    text = re.sub(rf"{CONSTANT} = ", "", text)                   # "= π/2 - 1e-6" follows
+    return re.sub(CONSTANT, lambda m: number(constants[m.group(1)]) if m.group(1) in constants
+                  else m.group(0), text)
+
+
+def constants_of(cls) -> dict[str, float]:
+    """The numeric module-level constants a plugin's text may name."""
+    from mi_brdfs.bsdfs import microfacet, params
+    found = {}
+    for module in (params, microfacet, inspect.getmodule(cls)):
+        found.update({k: float(v) for k, v in vars(module).items()
+                      if k.isupper() and isinstance(v, (int, float)) and not isinstance(v, bool)})
+    return found
+
+
 def _range(lo, hi) -> str:
     if lo is not None and hi is not None:
-        return f" in [{lo:g}, {hi:g}]"
+        return f" in [{number(lo)}, {number(hi)}]"
     if lo is not None:
-        return f" >= {lo:g}"
-    return f" <= {hi:g}" if hi is not None else ""
+        return f" ≥ {number(lo)}"
+    return f" ≤ {number(hi)}" if hi is not None else ""
 
 
-def _row(name: str, kind: str, doc: str, default: str) -> list[str]:
-    lines = textwrap.wrap(" ".join(doc.split()), 66) or [""]
+def _row(name: str, kind: str, doc: str, default: str, constants: dict[str, float]) -> list[str]:
+    lines = textwrap.wrap(human(" ".join(doc.split()), constants), 66) or [""]
     return [f"   * - ``{name}``", f"     - {kind}", f"     - {lines[0]}",
             *(f"       {line}" for line in lines[1:]), f"     - {default}"]
 
@@ -48,9 +119,11 @@ def parameter_table(cls) -> str:
     base's): the one source of the plugin's parameter documentation."""
     rows = [".. list-table::", "   :header-rows: 1", "   :widths: 20 20 50 10", "",
             "   * - Parameter", "     - Type", "     - Description", "     - Default"]
+    constants = constants_of(cls)
     for p in cls.PARAMS:
         kind = FORMS[p.kind] + _range(p.lo, p.hi) + " (∂)"
-        rows += _row(p.name, kind, p.doc, "none" if p.optional else f"{p.default:g}")
+        rows += _row(p.name, kind, p.doc, "none" if p.optional else number(p.default),
+                     constants)
     for o in cls.OPTIONS + tuple(o for o in cls.all_options() if o not in cls.OPTIONS):
         doc = o.doc
         if isinstance(o.default, bool):
@@ -60,7 +133,7 @@ def parameter_table(cls) -> str:
         else:
             kind, default = "string", f'``"{o.default}"``'
             doc += " One of " + ", ".join(f'``"{c}"``' for c in o.choices) + "."
-        rows += _row(o.name, kind, doc, default)
+        rows += _row(o.name, kind, doc, default, constants)
     return "\n".join(rows)
 
 
@@ -147,11 +220,10 @@ def notes(cls, pictures) -> list[str]:
              "variants it is a depolarizer, as Mitsuba's ``diffuse``.",
              "- **Differentiable**: every parameter marked ∂ is exposed by ``mi.traverse`` "
              "and can be updated and differentiated; options are fixed at load time."]
-    for sweep in pictures:
-        param = next((p for p in cls.PARAMS if p.name == sweep.parameter), None)
-        if param is not None:
-            lines.append(f"- **{sweep.parameter}**, varied in the renders below: "
-                         + " ".join(param.doc.split()))
+    varied = [s.parameter for s in pictures if any(p.name == s.parameter for p in cls.PARAMS)]
+    if varied:                          # what they mean is the table's: not repeated here
+        lines.append("- **Renders**: " + " and ".join(f"``{v}``" for v in varied)
+                     + " vary in the renders below (see the table for what each means).")
     return lines + [""]
 
 
@@ -205,7 +277,8 @@ def page(cls, work: Path, srcdir: Path) -> str:
     module = inspect.getmodule(cls)
     name = cls.name
     doc = inspect.getdoc(module).strip()
-    parts = [f".. _plugin-{name}:", "", doc.replace(PARAMETERS, parameter_table(cls)), "",
+    body = human_docstring(doc, constants_of(cls)).replace(PARAMETERS, parameter_table(cls))
+    parts = [f".. _plugin-{name}:", "", body, "",
              "The same BSDF from Python, as a dictionary:", "",
              ".. code-block:: python", "",
              textwrap.indent(python_example(xml_example(doc)), "    "), ""]

@@ -88,12 +88,30 @@ def generate(app) -> None:
     app.project.__class__ = GeneratedProject
 
 
+# the site's page that introduces a copied report: the report links back to it
+# (the trade report's page is the fit helper's: it makes its own links)
+BACK = {"validation": ("results/validation.html", "Validation report")}
+
+
+def back_link(page_html: str, name: str) -> str:
+    """A copied report's page with a line of links back into the site at its top."""
+    target, title = BACK[name]
+    line = (f"<p class='site-links' style='font-size: 0.9em'><a href='../../index.html'>"
+            f"mi_brdfs documentation</a> › <a href='../../{target}'>{title}</a></p>\n")
+    return page_html.replace("<body>\n", "<body>\n" + line, 1)
+
+
 def copy_reports(app, error) -> None:
     """The committed reports (their HTML page and pictures) into the site, as
-    ``reports/<name>/`` (the results pages link to them)."""
+    ``reports/<name>/`` (the results pages link to them, and they link back)."""
     if error is None and app.builder.format == "html":
         for name, folder in REPORTS.items():
-            shutil.copytree(folder, Path(app.outdir) / "reports" / name, dirs_exist_ok=True)
+            site = Path(app.outdir) / "reports" / name
+            shutil.copytree(folder, site, dirs_exist_ok=True)
+            if name in BACK:
+                index = site / "index.html"
+                index.write_text(back_link(index.read_text(encoding="utf-8"), name),
+                                 encoding="utf-8")
 
 
 def setup(app):

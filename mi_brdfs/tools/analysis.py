@@ -77,7 +77,7 @@ def polar_lobes(ax, bsdf, angles=(0, 30, 60, 80), title: str = "") -> None:
     """Draw eval in the plane of incidence on a matplotlib polar axis, one curve per angle."""
     for a in angles:
         theta_o, value = plane_of_incidence(bsdf, a)
-        ax.plot(theta_o, value, label=f"θ_i = {a}°")
+        ax.plot(theta_o, value, label=rf"$\theta_i$ = {a}°")     # θ with a subscript i
     from matplotlib.ticker import MaxNLocator   # optional: the reports extra
 
     ax.set_theta_zero_location("N")

@@ -166,6 +166,21 @@ def common(threads: bool = True, variant: bool = False) -> Parser:
     return p
 
 
+# the compare command's thresholds: the metric each bounds (mi_brdfs.tools.compare)
+COMPARE_LIMITS = {
+    "max_rmse": "root-mean-square difference, sqrt(mean((t - r)²)),",
+    "max_relmse": "relative MSE, mean((t - r)² / (r + 0.01)²),",
+    "max_mae": "mean absolute difference, mean(|t - r|),",
+    "max_abs": "largest absolute difference of a pixel channel, max(|t - r|),",
+    "max_flip": "mean FLIP error",
+}
+# bench's groups in their order (bench.groups.GROUPS, which needs the reports
+# extra to import: the parser of every command must not)
+BENCH_GROUPS = ("builtin", "models", "oren_nayar", "sampling", "integrators", "convergence",
+                "scaling", "lobes", "energy", "materials", "frozen", "kernels", "tracing",
+                "explore", "trade")
+
+
 def parser() -> Parser:
     v = render.versions()
     p = Parser(prog="mi-brdfs", description=DESCRIPTION)
@@ -204,9 +219,9 @@ def parser() -> Parser:
     c.add_argument("tests", nargs="+", help="the images to compare with it")
     c.add_argument("-o", "--output", required=True,
                    help="report folder: new, empty, or a previous report")
-    for name in ("max_rmse", "max_relmse", "max_mae", "max_abs", "max_flip"):
+    for name, what in COMPARE_LIMITS.items():
         c.add_argument("--" + name.replace("_", "-"), dest=name, type=real(0, 1e30), default=None,
-                       metavar="X", help=f"FAIL a test image whose {name[4:]} exceeds X")
+                       metavar="X", help=f"FAIL a test image whose {what} exceeds X")
     c.add_argument("--min-psnr", dest="min_psnr", type=real(-1e3, 1e3), default=None,
                    metavar="DB", help="FAIL a test image whose PSNR is below DB")
     c.add_argument("--flip", choices=("ldr", "hdr"), default=None,
@@ -233,7 +248,9 @@ def parser() -> Parser:
     b.add_argument("--quick", action="store_true",
                    help="a smoke test that every group runs: tiny scene, few repeats, no "
                         "findings (CI); its numbers are not measurements")
-    b.add_argument("--only", default=None, help="comma-separated groups (default: all)")
+    b.add_argument("--only", default=None, metavar="GROUP[,GROUP...]",
+                   help="run these groups only (default: all of them): "
+                        + ", ".join(BENCH_GROUPS))
     b.add_argument("--cache", default=None, help="reference cache (default ~/.cache/mi_brdfs)")
     b.set_defaults(run=cmd_bench)
 

@@ -68,7 +68,8 @@ def test_every_group_and_file(results):
         for p in plots:
             assert (out / p).exists()
     readme = (out / "README.md").read_text()
-    assert all(f"## {g}" in readme for g in bench.GROUPS)
+    assert all(f"## {bench.report.title(g)}" in readme for g in bench.GROUPS)
+    assert "| name |" not in readme and "_s |" not in readme       # headers in words
     rows = list(csv.reader(open(out / "results.csv")))
     assert rows[0] == ["group", "row", "key", "value"] and len(rows) > 50
     assert list(cache.glob("ref-*.exr"))              # references are cached
@@ -359,3 +360,17 @@ def test_calls_by_mitsuba_are_counted_in_a_render():
     counts = anatomy.calls_in_a_render(GGX.ours)
     assert counts["sample"][0] >= 1 and counts["eval_pdf"][0] >= 1
     assert counts["sample"][1] == counts["sample"][0]      # sample calls no other method
+
+
+def test_report_headers_and_titles_are_words():
+    """Every column the committed run has reads as words with its unit
+    (builtin_compile_s: "built-in compile (s)"), every group has a title."""
+    from mi_brdfs.tools.bench import report
+    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    with open(os.path.join(root, "docs", "benchmarks", "results.json")) as f:
+        committed = json.load(f)
+    keys = {k for rows in committed["groups"].values() for row in rows for k in row}
+    assert {k: report.header(k) for k in keys if "_" in report.header(k)} == {}
+    assert report.header("builtin_compile_s") == "built-in compile (s)"
+    assert report.header("plugin_peak_mib") == "plugin peak memory (MiB)"
+    assert set(report.TITLES) == set(bench.GROUPS)

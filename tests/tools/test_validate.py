@@ -160,7 +160,7 @@ def test_report_opens_in_headless_chromium(report, tmp_path):
     # a 1200-pixel page (the plots are shown at their own size).
     from PIL import Image
     html = (out / "index.html").read_text()
-    assert html.index("<h2>Summary</h2>") < html.index("<img")
+    assert html.index("<h2 id='summary'>Summary</h2>") < html.index("<img")
     widths = [Image.open(p).size[0] for p in out.glob("*.png")]
     assert widths and max(widths) <= 1100
 
@@ -180,8 +180,11 @@ def test_summary_counts_every_check(report):
     assert explained["furnace/oren_nayar/σ = 0.2 (exceeds 1 near grazing: the model's own)/hdr/"
                      "energy"]["status"] == "known"
     html = (out / "index.html").read_text()
-    assert html.index("<h2>Summary</h2>") < html.index("1. Built-in equivalence")
-    assert "documented known limitations" in html
+    assert html.index("<h2 id='summary'>Summary</h2>") < html.index("1. Built-in equivalence")
+    known = r["summary"]["known"]
+    assert f"{known} documented known limitation{'' if known == 1 else 's'}," in html
+    for anchor in ("summary", *(f"section-{i}" for i in range(1, 6))):   # the contents
+        assert f"<a href='#{anchor}'>" in html and f"id='{anchor}'" in html, anchor
 
 
 def test_by_design_scanline_rows_are_documented_not_red(report):

@@ -7,6 +7,7 @@ from __future__ import annotations
 import os
 
 from ..measures import pareto
+from .report import header
 
 
 def _figure(size):
@@ -22,7 +23,7 @@ def bars(rows: list[dict], key: str, title: str, ref: float = 1.0):
     ax.axvline(ref, color="k", lw=0.6)
     ax.invert_yaxis()
     ax.tick_params(labelsize=7)
-    ax.set_xlabel(key)
+    ax.set_xlabel(header(key))
     ax.set_title(title, fontsize=9)
     return fig
 
@@ -33,13 +34,18 @@ def scatter(rows: list[dict], label, time_key: str, error_key: str, title: str):
     front = pareto(points)
     fig = _figure((5, 3.6))
     ax = fig.subplots()
+    from matplotlib.ticker import MaxNLocator   # optional: the reports extra
     for (t, e), r, on in zip(points, rows, front):
         ax.semilogy(t, e, "o", color="C3" if on else "C0")
-        ax.annotate(label(r), (t, e), fontsize=6)
+        ax.annotate(label(r), (t, e), xytext=(4, 4), textcoords="offset points", fontsize=7)
     xs, ys = zip(*sorted(p for p, on in zip(points, front) if on))
     ax.plot(xs, ys, "-", color="C3", lw=0.8, label="Pareto front")
-    ax.set_xlabel("seconds")
-    ax.set_ylabel(error_key)
+    ax.margins(x=0.25, y=0.2)                 # room for the labels beside the points
+    ax.xaxis.set_major_locator(MaxNLocator(4))  # a few ticks: a narrow range has long ones
+    ax.tick_params(labelsize=7)
+    ax.tick_params(axis="y", which="minor", labelsize=6)
+    ax.set_xlabel(header(time_key))
+    ax.set_ylabel(header(error_key))
     ax.set_title(title, fontsize=9)
     ax.legend(fontsize=7)
     return fig
@@ -49,7 +55,7 @@ def save(out_dir: str, figures: dict) -> list[str]:
     """Write the figures as PNG files; their names."""
     for name, fig in figures.items():
         fig.tight_layout()
-        fig.savefig(os.path.join(out_dir, name), dpi=90)
+        fig.savefig(os.path.join(out_dir, name), dpi=90, bbox_inches="tight")  # labels kept
     return list(figures)
 
 

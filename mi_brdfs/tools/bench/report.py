@@ -188,6 +188,75 @@ def trade(rows: list[dict]) -> str | None:
 #  The files
 # ----------------------------------------------------------------------------
 
+# A group's section title (the group's name, what --only takes, beside it)
+TITLES = {
+    "builtin": "Plugins against Mitsuba's built-ins",
+    "models": "Render time of every model",
+    "oren_nayar": "Oren-Nayar: the table against the exact formulas",
+    "sampling": "Sampling strategies: error at equal time",
+    "integrators": "Integrators against a converged reference",
+    "convergence": "Error against samples per pixel",
+    "scaling": "Render time against resolution and lights",
+    "lobes": "A lobe switched off costs nothing",
+    "energy": "What energy compensation costs",
+    "materials": "Many materials in one scene",
+    "frozen": "Frozen passes",
+    "kernels": "The BSDF methods' kernels",
+    "tracing": "Tracing one call of each method",
+    "explore": "The explorer's latency",
+    "trade": "Which model for which material",
+}
+
+
+def title(group: str) -> str:
+    """A group's section title, e.g. "Frozen passes (``frozen``)"."""
+    return f"{TITLES[group]} (`{group}`)" if group in TITLES else group
+
+
+# A table's column header: the key's words as a reader says them, its unit in
+# brackets. HEADERS names the columns whose key alone does not say what they
+# hold; every other key is read word by word (WORDS), its suffix the unit.
+HEADERS = {
+    "name": "configuration",
+    "ratio": "time ratio",
+    "relmse": "relMSE",
+    "efficiency": "efficiency, 1 / (relMSE × time) (1/s)",
+    "efficiency_vs_first": "efficiency over the first strategy's",
+    "relative_to_lambert": "time over lambert's",
+    "per_spp_s": "time per sample per pixel (s)",
+    "slope": "log-log slope",
+    "table": "table",
+    "n": "runs",
+    "floor": "floor beside it",
+    "note": "note",
+    "relmse_vs_exact": "relMSE against the exact formula",
+    "max_abs_vs_exact": "largest absolute difference from the exact formula",
+    "off_s": "compensation off (s)",
+    "on_s": "compensation on (s)",
+    "ms_vs_floor": "time over the floor's",
+    "median_s": "median time (s)",
+    "median_ms": "median time (ms)",
+    "max_ms": "largest time (ms)",
+    "render_calls_all": "render calls, all",
+    "config": "configuration",
+}
+WORDS = {"builtin": "built-in", "first": "first render", "warm": "warm render",
+         "peak": "peak memory", "relmse": "relMSE", "vs": "over",
+         "codegen": "code generation", "execution": "kernel execution", "ops": "operations",
+         "vars": "variables", "1": "one", "mib": "", "ms": "", "s": ""}
+UNITS = {"s": "s", "ms": "ms", "mib": "MiB"}
+
+
+def header(key: str) -> str:
+    """A column's header, e.g. ``builtin_compile_s`` -> "built-in compile (s)"."""
+    if key in HEADERS:
+        return HEADERS[key]
+    words = key.split("_")
+    unit = UNITS.get(words[-1]) if len(words) > 1 else None
+    text = " ".join(w for w in (WORDS.get(w, w) for w in words) if w)
+    return f"{text} ({unit})" if unit else text
+
+
 def _fmt(v) -> str:
     if isinstance(v, float):
         return f"{v:.4g}"
@@ -229,10 +298,10 @@ def markdown(results: dict, about: dict[str, str], images: str = "") -> str:
         # every row's keys, in order (a row may lack some: e.g. no floor beside it)
         keys = [k for k in dict.fromkeys(k for r in rows for k in r)
                 if not any(isinstance(r.get(k), list) for r in rows)]
-        lines += [f"## {group}", ""]
+        lines += [f"## {title(group)}", ""]
         if about.get(group):
             lines += [about[group], ""]
-        lines += ["| " + " | ".join(keys) + " |", "|" + "---|" * len(keys)]
+        lines += ["| " + " | ".join(header(k) for k in keys) + " |", "|" + "---|" * len(keys)]
         lines += ["| " + " | ".join(_fmt(r.get(k, "")) for k in keys) + " |" for r in rows]
         lines += ["", *(f"![{p}]({images}{p})" for p in results["plots"].get(group, [])), ""]
     return "\n".join(lines)

@@ -241,7 +241,7 @@ def report_section(out: str, quick: bool = False, log=None) -> list[dict]:
                 ax.plot(thetas, single, ":", color=f"C{k}", lw=1)
             ax.set_xlabel("incident angle θ_i (degrees)")
             ax.set_ylabel("directional albedo")
-            ax.set_title(f"cook_torrance {distribution}/{geometry} vs the walk on {smith} "
+            ax.set_title(f"cook_torrance {distribution}/{geometry} vs the walk on {smith}\n"
                          "(dotted: single scattering)", fontsize=8)
             ax.legend(fontsize=5.5, ncol=2)
             fig.tight_layout()
@@ -293,7 +293,7 @@ def report_html(rows: list[dict]) -> str:
     """The section's HTML (its heading, the table of residuals, the figures)."""
     esc = html.escape
     parts = ["<p>The random walk on the Smith microsurface (Heitz et al. 2016; "
-             "<code>mi_brdfs/tools/groundtruth/</code>), with Schlick's Fresnel at "
+             "the module <code>mi_brdfs.tools.groundtruth</code>), with Schlick's Fresnel at "
              "every bounce, is the truth of multiple scattering; compensated "
              "<code>cook_torrance</code> (white m_S, k = 0) against it. Blinn's D and "
              "the V-cavity G are compared with the walk of the nearest Smith "

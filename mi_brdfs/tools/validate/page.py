@@ -7,10 +7,21 @@ from .. import groundtruth, pages
 from .sections import ALPHA, PRESERVED_UP_TO
 from .verdicts import LABELS, STATUSES
 
-# beside the shared page's: the first two columns are names, left-aligned
+# beside the shared page's: a readable column of text, a contents box, headed
+# tables; the first two columns are names, left-aligned
 CSS = """
+body { font-family: system-ui, -apple-system, "Segoe UI", Roboto, sans-serif; line-height: 1.45;
+       color: #222; max-width: 74em; margin: 2em auto; padding: 0 1.5em; }
+h1 { margin-bottom: 0.2em; } h2 { margin-top: 2em; border-bottom: 1px solid #ddd; }
+a { color: #2456a4; }
+nav.contents { background: #f6f7f9; border: 1px solid #e2e4e8; padding: 0.6em 1.2em;
+               display: inline-block; }
+nav.contents ol { margin: 0.3em 0; padding-left: 1.4em; }
+th { background: #f0f2f5; }
+td, th { vertical-align: top; }
 td:first-child, td:nth-child(2) { text-align: left; }
-table.summary td { text-align: left; }
+table.summary td, table.summary th { text-align: left; }
+figure img { border: 1px solid #eee; }
 """
 
 
@@ -42,15 +53,20 @@ def _summary_html(results: dict) -> str:
                         key=lambda c: order[c["status"]])
     verdict = (f"<p class='fail'>{s['fail']} check(s) FAIL." if s["fail"] else
                "<p class='pass'>Every check passes or is documented.")
-    return (f"<h2>Summary</h2>{verdict} {len(check_list)} checks: {s['pass']} pass, "
-            f"{s['documented']} documented behaviour, {s['known']} documented known "
-            f"limitations, {s['fail']} fail.</p>"
+    return (f"<h2 id='summary'>Summary</h2>{verdict} {len(check_list)} checks: {s['pass']} pass, "
+            f"{s['documented']} documented behaviour, "
+            f"{plural(s['known'], 'documented known limitation')}, {s['fail']} fail.</p>"
             "<table class='summary'><tr><th>section</th>"
             + "".join(f"<th>{LABELS[st]}</th>" for st in shown) + f"</tr>{counts}</table>"
             + (f"<table class='summary'>{head}{rows(not_passed)}</table>" if not_passed else "")
             + f"<details><summary>All {len(check_list)} checks</summary>"
             f"<table class='summary'>{head}{rows(sorted(check_list, key=lambda c: order[c['status']]))}"
             "</table></details>")
+
+
+def plural(n: int, noun: str) -> str:
+    """``1 documented known limitation``, ``2 documented known limitations``."""
+    return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
 
 
 def _figures(files: dict[str, str]) -> str:
@@ -169,11 +185,24 @@ def groundtruth_html(results: dict) -> str:
 SECTIONS_HTML = (equivalence_html, furnace_html, sampling_html, lobes_html, groundtruth_html)
 
 
+def _anchored(section_html: str, anchor: str) -> tuple[str, str]:
+    """(the section with an id on its heading, the heading's text)."""
+    heading = section_html[len("<h2>"):section_html.index("</h2>")]
+    return f"<h2 id='{anchor}'>" + section_html[len("<h2>"):], heading
+
+
 def html_page(results: dict) -> str:
-    """The report's page: the run, the summary, then each section."""
+    """The report's page: the run, its contents, the summary, then each section."""
     esc = html.escape
+    sections = [_anchored(section(results), f"section-{i}")
+                for i, section in enumerate(SECTIONS_HTML, 1)]
+    contents = ("<nav class='contents'><b>Contents</b><ol>"
+                "<li><a href='#summary'>Summary</a></li>"
+                + "".join(f"<li><a href='#section-{i}'>{heading.split('. ', 1)[-1].split(' (')[0]}</a></li>"
+                          for i, (_, heading) in enumerate(sections, 1))
+                + "</ol></nav>")
     body = (f"<p>{esc(results['size'])} run, {results['seconds']:.0f} s; Mitsuba "
             f"{esc(results['mitsuba'])}, variant {esc(results['variant'])}. Statistical tests "
-            f"at α = {ALPHA}.</p>{_summary_html(results)}"
-            + "".join(section(results) for section in SECTIONS_HTML))
+            f"at α = {ALPHA}.</p>{contents}{_summary_html(results)}"
+            + "".join(text for text, _ in sections))
     return pages.page("mi_brdfs validation", body, CSS)

@@ -355,6 +355,12 @@ def negative_section(size: Settings, negatives: dict, count: int) -> list[dict]:
 #  4. Lobes
 # ----------------------------------------------------------------------------
 
+# What a lobe plot's radius is: eval's value, f·cos θ_o; a BRDF in hdr mode
+# (per steradian), the lecture's shading value in scan-line mode (no 1/π).
+LOBE_RADIUS = {"hdr": r"radius: $f\,\cos\theta_o$ (1/sr)",
+               "scanline": r"radius: $f\,\cos\theta_o$ (the lecture's value, no unit)"}
+
+
 def lobe_section(out: str, models: dict, angles=(0, 30, 60, 80)) -> list[dict]:
     from matplotlib.figure import Figure    # the reports extra; no pyplot: no global backend
 
@@ -363,9 +369,11 @@ def lobe_section(out: str, models: dict, angles=(0, 30, 60, 80)) -> list[dict]:
         fig = Figure(figsize=(8.4, 3.0), dpi=100)
         axes = fig.subplots(1, 2, subplot_kw={"projection": "polar"})
         for ax, mode in zip(axes, MODES):
+            # the radius named under the title (a polar axis has no y label)
             analysis.polar_lobes(ax, mi.load_dict({**base, "mode": mode}), angles,
-                                 f"{name} ({mode})")
-        axes[1].legend(fontsize=8, loc="center left", bbox_to_anchor=(1.02, 0.5))
+                                 f"{name} ({mode})\n{LOBE_RADIUS[mode]}")
+        axes[1].legend(fontsize=8, loc="center left", bbox_to_anchor=(1.02, 0.5),
+                       title="viewer\n(both plots)", title_fontsize=8)
         fig.subplots_adjust(left=0.02, right=0.84, bottom=0.02, top=0.88, wspace=0.12)
         file = f"lobe_{name}.png"
         fig.savefig(os.path.join(out, file), bbox_inches="tight", pad_inches=0.1)

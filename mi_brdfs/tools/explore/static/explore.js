@@ -113,6 +113,7 @@ function receive(msg) {
   // the next request first: the server computes it while this answer is drawn
   if (msg.op in REQUESTS) answered(column, msg.op, msg.id);
   show(column, msg);
+  if (msg.op === "render") draw3dSoon(column);
 }
 
 function show(column, msg) {
@@ -286,19 +287,24 @@ function drawPlots(column, msg) {
   drawAlbedo(column);
   column.el.dataset.plots = String(msg.id);
   // The 3-D lobe (WebGL, in software on a machine without a GPU: the slowest
-  // view by far) at the next frame, the newest only: it never holds up the
-  // other views or the next answer.
+  // view by far) later, the newest only: once the render's first pass is
+  // shown if one is on its way, so that it holds up neither that image nor
+  // the other views.
   column.lobe3dWanted = msg;
-  if (!column.lobe3dPending) {
-    column.lobe3dPending = true;
-    requestAnimationFrame(() => setTimeout(() => {
-      column.lobe3dPending = false;
-      const newest = column.lobe3dWanted;
-      drawLobe3d(column, newest);
-      column.el.dataset.lobe3d = String(newest.id);
-      trace("shown", column, "lobe3d", newest.id, {received: newest.received});
-    }));
-  }
+  if (!column.inflight.render) draw3dSoon(column);
+}
+
+function draw3dSoon(column) {
+  if (column.lobe3dPending || !column.lobe3dWanted) return;
+  column.lobe3dPending = true;
+  requestAnimationFrame(() => setTimeout(() => {
+    column.lobe3dPending = false;
+    const newest = column.lobe3dWanted;
+    column.lobe3dWanted = null;
+    drawLobe3d(column, newest);
+    column.el.dataset.lobe3d = String(newest.id);
+    trace("shown", column, "lobe3d", newest.id, {received: newest.received});
+  }));
 }
 
 function drawLobe(column, top) {

@@ -294,11 +294,17 @@ function drawPlots(column, msg) {
   if (!column.inflight.render) draw3dSoon(column);
 }
 
+const LOBE3D_MS = 400;
+
 function draw3dSoon(column) {
   if (column.lobe3dPending || !column.lobe3dWanted) return;
   column.lobe3dPending = true;
   requestAnimationFrame(() => setTimeout(() => {
     column.lobe3dPending = false;
+    // a newer answer is coming (a drag): drawn at most every LOBE3D_MS, the
+    // newest drawn when the answers stop
+    if (column.inflight.plots && performance.now() - (column.lobe3dAt ?? 0) < LOBE3D_MS) return;
+    column.lobe3dAt = performance.now();
     const newest = column.lobe3dWanted;
     column.lobe3dWanted = null;
     drawLobe3d(column, newest);

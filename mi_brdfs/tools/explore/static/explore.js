@@ -244,11 +244,12 @@ function buildParams(column, model) {
 
 // While a slider or a colour picker moves, the plots and the render follow
 // it; the random walk (a second or so of NumPy on the server's other thread,
-// taking CPU from the plots) waits until it is released.
+// taking CPU from the plots) waits until it is released, its dots hidden.
 const MOVING = ["plots", "render"];
 
 function change(column, name, value, ops) {
   column.material[name] = value;
+  if (ops && !ops.includes("walk")) column.walk = null;    // its dots were of another value
   update(column, ops);
 }
 

@@ -166,6 +166,14 @@ def test_copied_numbers_are_the_shortest_that_read_back_as_the_float32(ex):
     assert '"value": [1.0, 0.33333334, 0.05]' in strings["python"]
 
 
+def test_a_move_waits_for_the_first_answer_to_a_request_sent_after_it():
+    """The page's latency of a move (ms): to the first answer drawn of a
+    request sent after the move, not to an earlier request's answer."""
+    from mi_brdfs.tools.explore.latency import after_moves
+    answers = [(5.0, 50.0), (52.0, 130.0), (131.0, 170.0)]       # (sent, shown)
+    assert after_moves([0.0, 30.0, 60.0, 200.0], answers) == [50.0, 100.0, 110.0]
+
+
 # ----------------------------------------------------------------------------
 #  The views, against NumPy and physics
 # ----------------------------------------------------------------------------

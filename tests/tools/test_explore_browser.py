@@ -2,7 +2,10 @@
 driven by Playwright (never `playwright install`; mi_brdfs/tools/explore/
 browser.py). Load the page, move a slider and see the lobe change, see the
 preview arrive, copy the XML and load it, type a bad value and read the
-loader's message, fit, and fetch nothing from any other host."""
+loader's message, fit, and fetch nothing from any other host; and under use:
+the plots follow a drag, nothing overflows a 1280 px window, the copied
+numbers are short, the 3-D lobe stays in its panel. Nothing here is timed:
+the latencies are measured (tools/explore/latency.py), not asserted."""
 from __future__ import annotations
 
 import re

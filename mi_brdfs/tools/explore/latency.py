@@ -8,15 +8,16 @@ for the column, together) is timed from the slider's ``input`` event to the
 answer drawn, in the page's own clock (the page reports what it sends and
 shows as ``explore`` events on its document):
 
-- ``page: drag -> plots``, ``... -> first pass``, ``... -> walk``: a drag of
+- ``page: drag -> plots``, ``... -> 3-D lobe``, ``... -> first pass``: a drag of
   the left column's ``alpha`` slider, ``DRAG_MOVES`` moves ``DRAG_GAP_MS``
   apart, the button held down: for each move, the time until the page shows
   an answer to a request sent after it (the page keeps one request of each
-  kind in flight and sends the newest state when it answers);
-- ``page: change -> plots``, ``... -> first pass`` (the first pass of the
-  128² render), ``... -> walk``, ``... -> all``: single clicks on the
-  slider, each after the page has gone quiet; ``all`` is the last of the
-  three.
+  kind in flight and sends the newest state when it answers; the walk waits
+  for the release);
+- ``page: change -> plots``, ``... -> 3-D lobe``, ``... -> first pass``
+  (the first pass of the 128² render), ``... -> walk``, ``... -> all``:
+  single clicks on the slider, each after the page has gone quiet; ``all``
+  is the last of them.
 
 **One request at a time** (:func:`measure`): one websocket client that does
 what the page does, waiting for each answer before the next request (the
@@ -151,8 +152,8 @@ RECORD = """() => {
   }, true);
 }"""
 
-# Quiet: every request of each kind and column sent has been answered, and
-# nothing is waiting to be sent.
+# Quiet: nothing is waiting to be sent, and every request of each kind and
+# column sent has been answered (the plots' 3-D lobe drawn too).
 QUIET = """() => {
   const log = window.__latency, last = {}, shown = new Set();
   for (const e of log.events) {
@@ -160,7 +161,9 @@ QUIET = """() => {
     if (e.what === "sent") last[key] = e.id;
     else shown.add(key + " " + e.id);
   }
-  return Object.entries(last).every(([key, id]) => shown.has(key + " " + id)
+  const waiting = Object.values(page.columns).some(      // the page's own state: none to send
+    c => c.pending || Object.values(c.wanted).some(Boolean));
+  return !waiting && Object.entries(last).every(([key, id]) => shown.has(key + " " + id)
     && (!key.endsWith(" plots") || shown.has(key.replace(" plots", " lobe3d") + " " + id)));
 }"""
 
@@ -205,6 +208,8 @@ def _rows(kind: str, moves: list[dict], events: list[dict]) -> list[dict]:
     times = [m["t"] for m in moves]
     rows, every = [], []
     for label, op, view in VIEWS:
+        if kind == "drag" and op == "walk":
+            continue                            # sent at the release, by design
         waits = after_moves(times, _answers(events, "left", op, view))
         if waits:
             rows.append(_row(f"page: {kind} -> {label}", PAGE_CONFIG, [w / 1000 for w in waits]))

@@ -113,6 +113,7 @@ function receive(msg) {
   // the next request first: the server computes it while this answer is drawn
   if (msg.op in REQUESTS) answered(column, msg.op, msg.id);
   show(column, msg);
+  if (msg.op === "render") draw3dSoon(column);
 }
 
 function show(column, msg) {
@@ -243,11 +244,12 @@ function buildParams(column, model) {
 
 // While a slider or a colour picker moves, the plots and the render follow
 // it; the random walk (a second or so of NumPy on the server's other thread,
-// taking CPU from the plots) waits until it is released.
+// taking CPU from the plots) waits until it is released, its dots hidden.
 const MOVING = ["plots", "render"];
 
 function change(column, name, value, ops) {
   column.material[name] = value;
+  if (ops && !ops.includes("walk")) column.walk = null;    // its dots were of another value
   update(column, ops);
 }
 
@@ -286,19 +288,30 @@ function drawPlots(column, msg) {
   drawAlbedo(column);
   column.el.dataset.plots = String(msg.id);
   // The 3-D lobe (WebGL, in software on a machine without a GPU: the slowest
-  // view by far) at the next frame, the newest only: it never holds up the
-  // other views or the next answer.
+  // view by far) later, the newest only: once the render's first pass is
+  // shown if one is on its way, so that it holds up neither that image nor
+  // the other views.
   column.lobe3dWanted = msg;
-  if (!column.lobe3dPending) {
-    column.lobe3dPending = true;
-    requestAnimationFrame(() => setTimeout(() => {
-      column.lobe3dPending = false;
-      const newest = column.lobe3dWanted;
-      drawLobe3d(column, newest);
-      column.el.dataset.lobe3d = String(newest.id);
-      trace("shown", column, "lobe3d", newest.id, {received: newest.received});
-    }));
-  }
+  if (!column.inflight.render) draw3dSoon(column);
+}
+
+const LOBE3D_MS = 400;
+
+function draw3dSoon(column) {
+  if (column.lobe3dPending || !column.lobe3dWanted) return;
+  column.lobe3dPending = true;
+  requestAnimationFrame(() => setTimeout(() => {
+    column.lobe3dPending = false;
+    // a newer answer is coming (a drag): drawn at most every LOBE3D_MS, the
+    // newest drawn when the answers stop
+    if (column.inflight.plots && performance.now() - (column.lobe3dAt ?? 0) < LOBE3D_MS) return;
+    column.lobe3dAt = performance.now();
+    const newest = column.lobe3dWanted;
+    column.lobe3dWanted = null;
+    drawLobe3d(column, newest);
+    column.el.dataset.lobe3d = String(newest.id);
+    trace("shown", column, "lobe3d", newest.id, {received: newest.received});
+  }));
 }
 
 function drawLobe(column, top) {

@@ -55,12 +55,15 @@ anisotropic microsurface (held beyond α = 3 on either axis).
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import replace
 from typing import NamedTuple
 
 import drjit as dr
 import mitsuba as mi
+import numpy as np
 
+from .._binding import create
 from . import compensation, fresnel, lambert, microfacet as mf
 from .base import BRDF, Effective, rgb_list, schlick
 from .cases import (THETAS_GRAZING, THETAS_LOW, Cases, Chi2, Furnace, Pictures, Twin, preserves,
@@ -76,19 +79,21 @@ from .params import Option, Param, Reader
 # ----------------------------------------------------------------------------
 
 def eval_specular(wi, wo, microfacet: Microfacet, f0, geometry: str):
-    """The specular lobe at wo, D F G / (4 cos θ_i), and its ratio to
-    :func:`pdf_specular` where that is known in closed form (F G1(ω_o), for
-    visible normals with Smith's G; else None).
+    """The specular lobe at wo, D F G / (4 cos θ_i) with Schlick's F, and its
+    ratio to :func:`pdf_specular` where that is known in closed form (F G1(ω_o),
+    for visible normals with Smith's G; else None).
 
     The same in both modes: the lecture's scanline f_specular is
     m_S D F G / (4 clamp(ω_r·n)), and the hdr BRDF m_S D F G / (4 (ω_r·n)(d·n))
     times the cos θ_o of Mitsuba's ``eval`` is the same."""
     h = half_vector(wi, wo)
-    return _specular(wi, wo, h, microfacet.D(h), microfacet, f0, geometry)
+    return _specular(wi, wo, h, microfacet.D(h), microfacet, fresnel.schlick(f0, dot(wi, h)),
+                     geometry)
 
 
-def _specular(wi, wo, h, D, microfacet: Microfacet, f0, geometry: str):
-    F = fresnel.schlick(f0, dot(wi, h))
+def _specular(wi, wo, h, D, microfacet: Microfacet, F, geometry: str):
+    """D F G / (4 cos θ_i) and its closed-form ratio to the pdf (see
+    :func:`eval_specular`), F a Float or the number 1."""
     if geometry == "smith":
         # G / cos θ_i = G1(ω_o) · G1(ω_i)/cos θ_i: no division by a cosine that -> 0
         F_G1_o = F * microfacet.G1(wo)
@@ -108,7 +113,7 @@ def eval_pdf_specular(wi, wo, microfacet: Microfacet, f0, geometry: str):
     material at every call."""
     h = half_vector(wi, wo)
     D = microfacet.D(h)
-    value, ratio = _specular(wi, wo, h, D, microfacet, f0, geometry)
+    value, ratio = _specular(wi, wo, h, D, microfacet, fresnel.schlick(f0, dot(wi, h)), geometry)
     return value, ratio, microfacet.reflection_pdf(wi, wo, h, D)
 
 
@@ -194,12 +199,56 @@ def walk_residual(distribution: str, geometry: str,
                                       walk_spec(distribution, anisotropic))
 
 
+# The Fresnel forms (:mod:`.fresnel`) and the parameters each reads beyond
+# ``f0`` (``material`` stands for ``eta`` and ``kappa``).
+FRESNELS = ("schlick", "conductor", "dielectric", "f82")
+FRESNEL_PARAMS = {"schlick": (), "conductor": ("eta", "kappa"),
+                  "dielectric": ("int_ior", "ext_ior"), "f82": ("f82_tint",)}
+IOR_MIN = 1e-3                   # the smallest index of refraction accepted (> 0)
+STRING = mi.Properties.Type.String
+
+
+def ior_data() -> str:
+    """The folder of Mitsuba's measured complex indices (``<name>.eta.spd``,
+    ``<name>.k.spd``), the data ``roughconductor``'s ``material`` reads."""
+    return os.path.join(os.path.dirname(mi.__file__), "data", "ior")
+
+
+def materials() -> list[str]:
+    """The conductor names Mitsuba has data for (``roughconductor``'s ``material``)."""
+    return sorted(f[:-len(".eta.spd")] for f in os.listdir(ior_data()) if f.endswith(".eta.spd"))
+
+
+def material_textures(name: str) -> tuple:
+    """(η, κ) of Mitsuba's material ``name`` as textures holding what
+    ``roughconductor`` holds for it: in spectral variants the measured spectra
+    themselves; else the colour (or, mono, the value) ``roughconductor``
+    reduces them to, read from one through ``eval_attribute``."""
+    folder = ior_data()
+    if mi.is_spectral:
+        out = []
+        for part in ("eta", "k"):
+            wavelengths, values = mi.spectrum_from_file(os.path.join(folder, f"{name}.{part}.spd"))
+            out.append(create("irregular", {"wavelengths": ", ".join(map(repr, wavelengths)),
+                                            "values": ", ".join(map(repr, values))}))
+        return tuple(out)
+    reference = create("roughconductor", {"material": name})
+    si = dr.zeros(mi.SurfaceInteraction3f)
+    out = []
+    for part in ("eta", "k"):
+        value = [float(x) for x in np.array(reference.eval_attribute(part, si)).ravel()]
+        out.append(create("uniform", {"value": value[0]}) if len(value) == 1 else
+                   create("srgb", {"color": mi.ScalarColor3f(value), "unbounded": True}))
+    return tuple(out)
+
+
 class Inputs(NamedTuple):
     """What one call evaluates at its point."""
     colour_d: Spectrum | None       # m_D, where the diffuse lobe is present
     colour_s: Spectrum | None       # m_S, where the specular lobe is present
     microfacet: Microfacet          # D and G at the point's roughness
     f0: Float                       # F0 (also the compensation's table axis)
+    fresnel: tuple = ()             # what the Fresnel form reads beyond F0, at the point
 
 
 class CookTorrance(BRDF):
@@ -214,6 +263,14 @@ class CookTorrance(BRDF):
                    "Beckmann G1 for beckmann (a rational fit of its erf form, within 5.5e-6), "
                    "and for blinn the Smith G1 of the Blinn "
                    "distribution itself, tabulated (:mod:`mi_brdfs.bsdfs.microfacet`)."),
+        Option("fresnel", "schlick", FRESNELS,
+               doc='F: ``"schlick"`` is the lecture\'s F0 + (1 - F0)(1 - ω_r·h)^5 with ``f0``; '
+                   '``"conductor"`` the exact reflectance of a conductor of complex index '
+                   '``eta`` + i ``kappa`` or of Mitsuba\'s ``material`` (read as '
+                   '``roughconductor`` reads them); ``"dielectric"`` the exact reflectance of '
+                   'the interface ``int_ior``/``ext_ior`` (read as ``roughplastic`` reads '
+                   'them); ``"f82"`` Hoffman\'s F82-tint (``f0``, ``f82_tint``): '
+                   ':mod:`mi_brdfs.bsdfs.fresnel`.'),
         Option("sample_visible", True,
                doc="Beckmann and GGX: sample the visible normals (else the full distribution "
                    "D(m)·cos θ_m); Blinn always samples the latter."),
@@ -226,6 +283,28 @@ class CookTorrance(BRDF):
               doc="the weight of the diffuse lobe; the specular lobe gets 1 - k."),
         Param("f0", 0.04, 0.0, 1.0, kind="float", role="weight",
               doc="F_0 of Schlick's Fresnel approximation."),
+        Param("eta", 0.0, 0.0, None, role="shape", upper=3.0, optional=True,
+              doc='``fresnel="conductor"``: η, the real part of the conductor\'s index of '
+                  "refraction (a colour, or a spectrum), as ``roughconductor``'s ``eta``; "
+                  "default 0 with ``kappa`` 1, the perfect mirror (F = 1), as there. Or give "
+                  "``material``, a string naming Mitsuba's measured data (``Au``, ``Cu``, "
+                  "``Al``, ...: its ``data/ior``), not both. Read only with that Fresnel."),
+        Param("kappa", 1.0, 0.0, None, role="shape", upper=5.0, optional=True,
+              doc='``fresnel="conductor"``: κ, the extinction coefficient, the imaginary '
+                  "part of the index (``roughconductor``'s ``k``, renamed: the lecture's "
+                  "``k`` is the diffuse weight)."),
+        Param("int_ior", 1.49, IOR_MIN, None, kind="float", role="shape", upper=3.0,
+              optional=True,
+              doc='``fresnel="dielectric"``: the interior index of refraction, a number or '
+                  "one of Mitsuba's names (``\"bk7\"``, ``\"water\"``, ...; default "
+                  "polypropylene, 1.49), as ``roughplastic``'s ``int_ior``."),
+        Param("ext_ior", 1.000277, IOR_MIN, None, kind="float", role="shape", upper=3.0,
+              optional=True,
+              doc='``fresnel="dielectric"``: the exterior index of refraction (default air, '
+                  "1.000277), likewise."),
+        Param("f82_tint", 1.0, 0.0, 1.0, role="weight", optional=True,
+              doc='``fresnel="f82"``: the reflectance at 82° as a fraction of Schlick\'s '
+                  "there (a colour; 1: Schlick's curve), Hoffman 2023."),
         Param("alpha", 0.3, 0.0, None, kind="scalar", role="shape", upper=1.0, discontinuous=True,
               doc="the lecture's roughness ρ (<= 1 for ``blinn``); values below "
                   "``ALPHA_MIN`` = 1e-4 (0, the perfectly smooth surface, included) are "
@@ -257,14 +336,62 @@ class CookTorrance(BRDF):
                 raise reader.error(name, props[name], 'distribution "beckmann" or "ggx" '
                                    "(Blinn's D is isotropic here: give alpha)")
         given = ("alpha_u", "alpha_v") if self.anisotropic else ("alpha",)
+        form = self.options.fresnel
+        if getattr(self.options, "energy_compensation", False) and form != "schlick":
+            raise reader.error("energy_compensation", True,
+                               f'false with fresnel="{form}" (its random-walk reference is '
+                               "tabulated for Schlick's F only)")
+        if "material" in props:
+            self.read_material(reader)
+        for name in ("int_ior", "ext_ior"):
+            if name in props and props.type(name) == STRING:
+                props[name] = self.lookup_ior(reader, name)
         for p in self.PARAMS:
             if p.name.startswith("alpha") and p.name not in given:
+                continue
+            if p.optional and p.name not in props and p.name not in FRESNEL_PARAMS[form]:
+                continue                                     # not read by this Fresnel
+            if p.name in ("eta", "kappa") and "material" in props:
                 continue
             if p.name == "alpha" and self.options.distribution == "blinn":
                 p = replace(p, hi=1.0)                       # Blinn: 2/rho² - 2 >= 0
             self.read_param(reader, p)
         if self.options.distribution == "blinn" and self.options.geometry == "smith":
             self.m_g1_blinn = mf.g1_blinn_grid().data        # traversed: frozen functions
+
+    def read_material(self, reader: Reader) -> None:
+        """``material``: Mitsuba's measured (η, κ) of a conductor, as ``roughconductor``
+        reads it (``"none"``: its perfect mirror, η = 0, κ = 1)."""
+        props, name = reader.props, reader.props["material"]
+        valid = f"one of {', '.join(materials())} or \"none\" (Mitsuba's data/ior)"
+        if props.type("material") != STRING or \
+                (name != "none" and name not in materials()):
+            raise reader.error("material", name, valid)
+        if self.options.fresnel != "conductor":
+            raise reader.error("material", name, f'given with fresnel="conductor" only '
+                               f'(here "{self.options.fresnel}")')
+        for other in ("eta", "kappa"):
+            if other in props:
+                raise reader.error(other, props[other], "either material or eta/kappa, not both")
+        if name == "none":
+            eta, kappa = (create("uniform", {"value": v}) for v in (0.0, 1.0))
+        else:
+            eta, kappa = material_textures(name)
+        for p in self.PARAMS:
+            if p.name in ("eta", "kappa"):
+                setattr(self, "m_" + p.name, eta if p.name == "eta" else kappa)
+                self.state.params[p.name] = p
+
+    @staticmethod
+    def lookup_ior(reader: Reader, name: str) -> float:
+        """An index of refraction given by name, from Mitsuba's table (as
+        ``roughplastic`` reads ``int_ior`` and ``ext_ior``)."""
+        try:
+            return float(mi.lookup_ior(reader.props, name, 1.0))
+        except Exception as e:
+            reason = str(e).strip().splitlines()[-1].split("] ")[-1]
+            raise reader.error(name, reader.props[name],
+                               f"a number, or one of Mitsuba's names ({reason})") from None
 
     @classmethod
     def tables(cls) -> list:
@@ -289,9 +416,39 @@ class CookTorrance(BRDF):
         else:
             microfacet = Microfacet(o.distribution, roughness(self.m_alpha, si, active),
                                     visible=o.sample_visible)
+        reads = ()
+        if self.state.plan.lobes.specular:
+            reads = tuple(getattr(self, "m_" + name).eval(si, active)
+                          for name in FRESNEL_PARAMS[o.fresnel] if name not in ("int_ior", "ext_ior"))
+            if o.fresnel == "dielectric":
+                reads = (self.m_int_ior / self.m_ext_ior,)
         return Inputs(self.colour("diffuse_reflectance", "diffuse", si, active),
                       self.colour("specular_reflectance", "specular", si, active),
-                      microfacet, self.m_f0)
+                      microfacet, self.m_f0, reads)
+
+    def fresnel(self, inp, c):
+        """F at c = ω_r·h by the chosen form: a Float (``schlick``, ``dielectric``)
+        or a colour (``conductor``, ``f82``), see :meth:`coloured`."""
+        form = self.options.fresnel
+        if form == "schlick":
+            return fresnel.schlick(self.switch("f0"), c)
+        if form == "dielectric":
+            return fresnel.dielectric(inp.fresnel[0], c)
+        if form == "conductor":
+            return fresnel.conductor(inp.fresnel[0], inp.fresnel[1], c)
+        return fresnel.f82(self.switch("f0"), inp.fresnel[0], c)
+
+    def coloured(self) -> bool:
+        """True if F is a colour: it multiplies m_S then, the lobe's shape stays a Float."""
+        return self.options.fresnel in ("conductor", "f82")
+
+    def specular_lobe(self, inp, si, wo, h, D):
+        """m_S D F G / (4 cos θ_i) as a colour times a shape, with its ratio to the pdf."""
+        F = self.fresnel(inp, dot(si.wi, h))
+        coloured = self.coloured()
+        value, ratio = _specular(si.wi, wo, h, D, inp.microfacet, 1.0 if coloured else F,
+                                 self.options.geometry)
+        return Scaled(inp.colour_s * F if coloured else inp.colour_s, value, ratio)
 
     def lobe_weights(self, inp):
         k = self.switch("k")
@@ -301,9 +458,8 @@ class CookTorrance(BRDF):
         return lambert.eval_diffuse(inp.colour_d, mi.Frame3f.cos_theta(wo), self.options.mode)
 
     def eval_specular(self, inp, si, wo):
-        value, ratio = eval_specular(si.wi, wo, inp.microfacet, self.switch("f0"),
-                                     self.options.geometry)
-        return Scaled(inp.colour_s, value, ratio)
+        h = half_vector(si.wi, wo)
+        return self.specular_lobe(inp, si, wo, h, inp.microfacet.D(h))
 
     def sample_specular(self, inp, si, sample2):
         return sample_specular(si.wi, sample2, inp.microfacet)
@@ -312,9 +468,11 @@ class CookTorrance(BRDF):
         return pdf_specular(si.wi, wo, inp.microfacet)
 
     def eval_pdf_specular(self, inp, si, wo):
-        value, ratio, pdf = eval_pdf_specular(si.wi, wo, inp.microfacet, self.switch("f0"),
-                                              self.options.geometry)
-        return Scaled(inp.colour_s, value, ratio), pdf
+        # the half vector and D shared (see the module's eval_pdf_specular)
+        h = half_vector(si.wi, wo)
+        D = inp.microfacet.D(h)
+        return self.specular_lobe(inp, si, wo, h, D), \
+            inp.microfacet.reflection_pdf(si.wi, wo, h, D)
 
     def selection_weights(self, inp, si):
         w_d = w_s = mi.Float(0.0)
@@ -322,8 +480,9 @@ class CookTorrance(BRDF):
         if lobes.diffuse:
             w_d = self.m_k * lambert.albedo(mean(inp.colour_d), self.options.mode)
         if lobes.specular:
-            F = fresnel.schlick(self.m_f0, mi.Frame3f.cos_theta(si.wi))
-            w_s = (1.0 - self.m_k) * mean(inp.colour_s) * F
+            F = self.fresnel(inp, mi.Frame3f.cos_theta(si.wi))
+            w_s = (1.0 - self.m_k) * (mean(inp.colour_s * F) if self.coloured()
+                                      else mean(inp.colour_s) * F)
         return w_d, w_s
 
     @classmethod

@@ -652,6 +652,47 @@ class CookTorrance(BRDF):
                       "k": 0.0, "energy_compensation": True}
                      for d in ("beckmann", "ggx") for g in mf.GEOMETRIES
                      for au, av in ((0.0, 1.0), (1e4, 1e-4), (1e3, 1e3))]
+        # The Fresnel forms (F a colour for the conductor and F82: it weighs the lobe's
+        # selection too), each with a diffuse lobe beside and alone.
+        forms = [{"fresnel": "conductor", "material": "Au"},
+                 {"fresnel": "conductor", "eta": rgb([0.2, 0.5, 1.4]),
+                  "kappa": rgb([3.0, 2.4, 1.8])},
+                 {"fresnel": "dielectric", "int_ior": 1.5, "ext_ior": 1.0},
+                 {"fresnel": "f82", "f0": 0.9, "f82_tint": rgb([0.9, 0.6, 0.3])}]
+        chi2 += [Chi2({**c, **f, "distribution": "ggx", "geometry": "smith", "alpha": 0.3,
+                       "k": 0.3}, (0, 60, 85)) for f in forms[::2]]
+        chi2 += [Chi2({**c, **forms[3], "distribution": "beckmann", "alpha": 0.2, "k": 0.5},
+                      (45,))]
+        consistency += [{**c, **f, "distribution": d, "geometry": "smith", "alpha": 0.3, "k": k}
+                        for f in forms for d, k in (("ggx", 0.0), ("beckmann", 0.4))]
+        consistency += [{**c, **forms[0], "distribution": "ggx", "alpha_u": 0.05,
+                         "alpha_v": 0.4, "k": 0.0, "geometry": "smith"}]
+        # (the default conductor, η 0 and κ 1, is the perfect mirror: F = 1)
+        furnace += [Furnace(f"{label}, {d}, smith, α = {a}, k = 0", {
+                        **c, **f, "distribution": d, "geometry": "smith", "alpha": a, "k": 0.0,
+                        "specular_reflectance": 1.0})
+                    for label, f in (("conductor Au", forms[0]),
+                                     ("conductor η 0, κ 1", {"fresnel": "conductor"}),
+                                     ("dielectric 1.5", forms[2]),
+                                     ("F82 f0 0.9", {**forms[3], "f82_tint": 0.3}),
+                                     ("F82 f0 1, tint 1", {"fresnel": "f82", "f0": 1.0}))
+                    for d, a in (("ggx", 0.1), ("beckmann", 0.6))]
+        extremes += [{**c, **f, "alpha": a, "k": k, "distribution": "ggx", "geometry": g}
+                     for f in ({"fresnel": "conductor", "eta": 0.0, "kappa": 0.0},
+                               {"fresnel": "conductor", "eta": 1.0, "kappa": 0.0},
+                               {"fresnel": "conductor", "eta": 1e3, "kappa": 1e3},
+                               {"fresnel": "conductor", "material": "Au"},
+                               {"fresnel": "dielectric", "int_ior": 1e-3, "ext_ior": 1.0},
+                               {"fresnel": "dielectric", "int_ior": 1e3, "ext_ior": 1.0},
+                               {"fresnel": "dielectric", "int_ior": 1.0, "ext_ior": 1.0},
+                               {"fresnel": "f82", "f0": 0.0, "f82_tint": 0.0},
+                               {"fresnel": "f82", "f0": 1.0, "f82_tint": 0.0})
+                     for a in (1e-4, 1.0) for k in (0.0, 0.5) for g in mf.GEOMETRIES]
+        interior = [{**c, "distribution": "ggx", "geometry": "smith", "alpha": 0.4, "k": 0.4,
+                     "diffuse_reflectance": 0.5, "specular_reflectance": 0.7, **f}
+                    for f in ({"fresnel": "conductor", "eta": 1.3, "kappa": 2.0},
+                              {"fresnel": "dielectric", "int_ior": 1.5, "ext_ior": 1.1},
+                              {"fresnel": "f82", "f0": 0.8, "f82_tint": 0.6})]
         return Cases(
             chi2=chi2, consistency=consistency, furnace=furnace, extremes=extremes,
             interior=[{**c, "distribution": d, "geometry": "smith", "alpha": 0.4, "k": 0.4,
@@ -663,7 +704,8 @@ class CookTorrance(BRDF):
             + [{**c, "distribution": d, "geometry": "smith", "alpha_u": 0.2, "alpha_v": 0.5,
                 "k": 0.4, "f0": 0.3, "diffuse_reflectance": 0.5, "specular_reflectance": 0.7,
                 **on} for d, on in (("beckmann", {}), ("ggx", {}),
-                                    ("ggx", {"energy_compensation": True}))],
+                                    ("ggx", {"energy_compensation": True}))]
+            + interior,
             negative=({**c, "distribution": "ggx", "k": 0.0, "alpha": 0.1},
                       {**c, "distribution": "ggx", "k": 0.0, "alpha": 0.105}, 45),
             lobe_width=0.35,
@@ -675,7 +717,9 @@ class CookTorrance(BRDF):
             + [{**a, "k": 0.2} for a in anisotropic]
             + [{**white, "distribution": d, "alpha_u": 0.15, "alpha_v": 0.6,
                 "specular_reflectance": rgb([0.95, 0.64, 0.54]), "f0": 0.4}
-               for d in ("beckmann", "ggx")],
+               for d in ("beckmann", "ggx")]
+            + [{**c, **f, "distribution": "ggx", "geometry": "smith", "alpha": 0.3, "k": 0.2}
+               for f in forms],
             lobe={**c, "distribution": "ggx", "alpha": 0.3, "k": 0.3, "f0": 0.5,
                   "diffuse_reflectance": 0.8},
             costs=[(f"cook_torrance {d} {g}", {**c, "distribution": d, "geometry": g, "alpha": 0.3})

@@ -36,7 +36,7 @@ from __future__ import annotations
 import drjit as dr
 
 F82_COS = 1.0 / 7.0                 # c̄: cos 81.8°, where F82-tint sets the dip
-TINY = 1e-30                        # keeps √ and the quotients finite at their limits
+TINY = 1e-30                        # keeps the dielectric's quotients finite at their limits
 
 
 def schlick(f0, c):
@@ -52,19 +52,26 @@ def schlick(f0, c):
 def conductor(eta, kappa, c):
     """The exact reflectance of a conductor of complex index η + iκ at cos c
     (clamped to [0, 1]; η, κ colours or Floats). 1 for the perfect conductor
-    η = 0, κ = 1 (``roughconductor``'s default)."""
+    η = 0, κ = 1 (``roughconductor``'s default), 0 for η = 1, κ = 0 (no interface)."""
     c = dr.fmin(dr.fmax(c, 0.0), 1.0)
     c2 = c * c
     s2 = 1.0 - c2
     eta2, kappa2 = eta * eta, kappa * kappa
-    t = eta2 - kappa2 - s2
-    ab = dr.sqrt(dr.fmax(t * t + 4.0 * eta2 * kappa2, TINY))          # a² + b²
-    a = dr.sqrt(dr.fmax(0.5 * (ab + t), TINY))
+    t = (eta2 - kappa2 - 1.0) + c2      # η² - κ² - s², exact where c² << 1 and η ~ 1
+    # a² + b² >= |t| (also where t² underflows); safe_sqrt: a zero derivative at 0
+    ab = dr.fmax(dr.safe_sqrt(t * t + 4.0 * eta2 * kappa2), dr.abs(t))
+    a = dr.safe_sqrt(0.5 * (ab + t))
     two_ac = 2.0 * a * c
-    r_s = (ab + c2 - two_ac) / dr.fmax(ab + c2 + two_ac, TINY)
+    # (each quotient 1 where its denominator is 0: at grazing for η = 1, κ = 0, and
+    # at the normal for η = κ = 0; the other operand of the select never divides by 0,
+    # so that no derivative is inf times 0)
+    den = ab + c2 + two_ac
+    r_s = dr.select(den > 0.0, (ab + c2 - two_ac) / dr.select(den > 0.0, den, 1.0), 1.0)
     u, v = ab * c2 + s2 * s2, two_ac * s2
-    r_p = r_s * (u - v) / dr.fmax(u + v, TINY)
-    return 0.5 * (r_s + r_p)
+    r_p = r_s * dr.select(u + v > 0.0, (u - v) / dr.select(u + v > 0.0, u + v, 1.0), 1.0)
+    # (>= 0: where the index is that of the outside, η = 1 and κ = 0, the
+    # differences above cancel to a few ulps either side of 0)
+    return dr.fmax(0.5 * (r_s + r_p), 0.0)
 
 
 def dielectric(eta, c):

@@ -26,6 +26,31 @@ k·mean(m_D) (pi·k·mean(m_D) in scanline mode, whose Lambert term has no 1/pi)
 vs (1 - k)·mean(m_S)·Schlick(w_r·n). With k = 0 (or m_D = 0) there
 is no diffuse lobe, with k = 1 (or m_S = 0) no specular one.
 
+**Fresnel** (``fresnel``, :mod:`mi_brdfs.bsdfs.fresnel`): the lecture's
+F is Schlick's, ``"schlick"`` (the default), F0 + (1 - F0)(1 - ω_r·h)^5 with one
+number ``f0``; a colour comes from m_S. The other forms are what it approximates:
+
+- ``"conductor"``: the exact reflectance of a conductor of complex index
+  η + iκ, per colour channel (per wavelength in spectral variants), read as
+  Mitsuba's ``roughconductor`` reads it: ``material`` (a name of Mitsuba's
+  measured data, e.g. ``Au``, ``Cu``, ``Al``; the same data) or ``eta`` and
+  ``kappa`` (``roughconductor``'s ``k``: here ``k`` is the lecture's diffuse
+  weight). The hue of a metal shifts towards white at grazing angles, which
+  Schlick's F0 times a colour does not do. With ``k`` = 0 and
+  ``geometry="smith"`` the lobe is ``roughconductor``'s (eval, pdf and sample
+  weights equal, isotropic and anisotropic: tests/bsdfs/test_fresnel.py).
+- ``"dielectric"``: the exact reflectance of the interface ``int_ior`` /
+  ``ext_ior`` (numbers, or Mitsuba's names such as ``"bk7"``, as
+  ``roughplastic`` reads them), the F of ``roughplastic``'s specular lobe.
+- ``"f82"``: Hoffman's F82-tint (N. Hoffman, *Generalization of Adobe's
+  Fresnel Model*, 2023; the metal of OpenPBR and Adobe's Standard Material):
+  Schlick's curve with the reflectance near 82° set to ``f82_tint`` times
+  Schlick's there, a colour, between Schlick and the exact conductor.
+
+With a coloured F (conductor, F82) the F of each direction multiplies m_S.
+Energy compensation is for Schlick's F only (its random-walk tables are over
+F0): with another form it is refused at load time.
+
 **Energy compensation** (``energy_compensation``): the reciprocal
 multiple-scattering lobe of Kulla & Conty 2017 / Turquin 2019
 (:mod:`mi_brdfs.bsdfs.compensation`) whose albedo is what single scattering misses
@@ -50,6 +75,19 @@ anisotropic microsurface (held beyond α = 3 on either axis).
         <float name="alpha" value="0.2"/>
         <string name="distribution" value="ggx"/>
         <string name="geometry" value="smith"/>
+    </bsdf>
+
+The exact conductor, as ``roughconductor`` with ``material`` gold:
+
+.. code-block:: xml
+
+    <bsdf type="cook_torrance">
+        <float name="k" value="0"/>
+        <string name="geometry" value="smith"/>
+        <string name="distribution" value="ggx"/>
+        <string name="fresnel" value="conductor"/>
+        <string name="material" value="Au"/>
+        <float name="alpha" value="0.2"/>
     </bsdf>
 """
 from __future__ import annotations

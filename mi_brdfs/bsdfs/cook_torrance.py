@@ -92,6 +92,7 @@ The exact conductor, as ``roughconductor`` with ``material`` gold:
 """
 from __future__ import annotations
 
+import functools
 import math
 import os
 from dataclasses import replace
@@ -106,10 +107,10 @@ from . import compensation, fresnel, lambert, microfacet as mf
 from .base import BRDF, Effective, rgb_list, schlick
 from .cases import (THETAS_GRAZING, THETAS_LOW, Cases, Chi2, Furnace, Pictures, Twin, preserves,
                     rgb)
-from .grid import Axis
+from .grid import Axis, Grid
 from .microfacet import Microfacet, dot, half_vector
 from .mixture import Float, Scaled, Spectrum, mean
-from .params import Option, Param, Reader
+from .params import Option, Param, Reader, number, value_range
 
 
 # ----------------------------------------------------------------------------
@@ -165,6 +166,104 @@ def pdf_specular(wi, wo, microfacet: Microfacet):
     """The density of :func:`sample_specular` at wo: that of m at the half
     vector, pdf(m) / (4 ω_o·m) (:meth:`.Microfacet.reflection_pdf`)."""
     return microfacet.reflection_pdf(wi, wo, half_vector(wi, wo))
+
+
+# ----------------------------------------------------------------------------
+#  The plastic base: the substrate seen through the rough dielectric interface
+# ----------------------------------------------------------------------------
+
+# As Mitsuba's roughplastic (3.9.1): the transmittance t(μ) through the interface
+# on 64 nodes of μ = cos θ in [0, 1] (the first at μ = 1e-6), interpolated linearly;
+# the internal reflectance 2·mean(R(μ_j) μ_j) over the same nodes.
+PLASTIC_MU = Axis("mu", 0.0, 1.0, 64)
+PLASTIC_NODES = 64               # Gauss-Legendre nodes per slope axis of the quadrature
+
+
+def _erf(x):
+    """erf of a NumPy array (Abramowitz & Stegun 7.1.26, within 1.5e-7)."""
+    t = 1.0 / (1.0 + 0.3275911 * np.abs(x))
+    poly = t * (0.254829592 + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027
+                                                                          + t * 1.061405429))))
+    return np.sign(x) * (1.0 - poly * np.exp(-x * x))
+
+
+def _smith_g1(distribution: str, alpha: float, z, r):
+    """Smith's G1 of a direction with cos θ = |z| (r = sin θ), NumPy."""
+    tan2 = (r / np.maximum(np.abs(z), 1e-300)) ** 2
+    if distribution == "ggx":
+        return 2.0 / (1.0 + np.sqrt(1.0 + alpha * alpha * tan2))
+    a = 1.0 / np.maximum(alpha * np.sqrt(tan2), 1e-300)
+    return 2.0 / (1.0 + _erf(a) + np.exp(-a * a) / (a * math.sqrt(math.pi)))
+
+
+def _fresnel_dielectric_np(c, eta):
+    """The exact dielectric reflectance (light from outside, relative index η), NumPy."""
+    s2_t = (1.0 - c * c) / (eta * eta)
+    c_t = np.sqrt(np.maximum(1.0 - s2_t, 0.0))
+    r_s = (c - eta * c_t) / np.maximum(c + eta * c_t, 1e-300)
+    r_p = (eta * c - c_t) / np.maximum(eta * c + c_t, 1e-300)
+    return np.where(s2_t < 1.0, 0.5 * (r_s * r_s + r_p * r_p), 1.0), c_t
+
+
+def _visible_normals(distribution: str, alpha: float, mu: np.ndarray):
+    """Quadrature of the normals visible from ω = (sin θ, 0, μ) (Heitz 2014:
+    D_ω(m) = G1(ω) max(0, ω·m) D(m) / μ), in the slopes (p, q) = α (x, y) of
+    m ∝ (-p, -q, 1), where D(m) dω_m = P22 / cos θ_m dp dq and ω·m / cos θ_m
+    = μ - p sin θ: x over (-∞, μ/(α sin θ)) (where ω·m > 0), y over ℝ, each by
+    Gauss-Legendre in tan. Returns (m, w): normals (3, len(mu), n²) and their
+    weights (summing to 1 over each viewer's normals, up to the quadrature)."""
+    nodes, weights = np.polynomial.legendre.leggauss(PLASTIC_NODES)
+    u, w_u = 0.5 * (nodes + 1.0), 0.5 * weights          # on (0, 1)
+    sin_t = np.sqrt(1.0 - mu * mu)[:, None, None]
+    mu3 = mu[:, None, None]
+    # x = tan φ, φ from -π/2 to atan(x0) (π/2 at the normal, where x0 = ∞)
+    top = np.arctan2(mu3, alpha * sin_t)
+    phi = -0.5 * np.pi + (top + 0.5 * np.pi) * u[None, :, None]
+    x = np.tan(phi)
+    dx = (top + 0.5 * np.pi) / np.cos(phi) ** 2 * w_u[None, :, None]
+    psi = 0.5 * np.pi * (2.0 * u - 1.0)
+    y = np.tan(psi)[None, None, :]
+    dy = (np.pi / np.cos(psi) ** 2 * w_u)[None, None, :]
+    r2 = x * x + y * y
+    p22 = (1.0 / (np.pi * (1.0 + r2) ** 2) if distribution == "ggx"
+           else np.exp(-r2) / np.pi)                     # P22 in the scaled slopes
+    lam = np.maximum(mu3 - alpha * x * sin_t, 0.0)        # ω·m / cos θ_m
+    g1 = _smith_g1(distribution, alpha, mu3, sin_t)
+    w = g1 / np.maximum(mu3, 1e-300) * p22 * lam * dx * dy
+    norm = 1.0 / np.sqrt(1.0 + alpha * alpha * r2)
+    m = np.stack(np.broadcast_arrays(-alpha * x * norm, -alpha * y * norm, norm))
+    n = len(mu)
+    return m.reshape(3, n, -1), w.reshape(n, -1)
+
+
+@functools.lru_cache(maxsize=64)
+def plastic_tables(distribution: str, alpha: float, eta: float) -> tuple[np.ndarray, float]:
+    """(t, R): the transmittance through the rough dielectric interface of
+    relative index η (Smith's G1 masks the refracted ray) at the nodes of
+    :data:`PLASTIC_MU`, and the internal reflectance, the light the substrate
+    sends up that the interface reflects back (its 1/η Fresnel, total internal
+    reflection included), as ``roughplastic`` defines them."""
+    mu = np.maximum(PLASTIC_MU.nodes(), 1e-6)
+    sin_t = np.sqrt(1.0 - mu * mu)
+    wi = np.stack([sin_t, np.zeros_like(mu), mu])[:, :, None]
+
+    def integral(eta_: float, transmit: bool) -> np.ndarray:
+        m, w = _visible_normals(distribution, alpha, mu)
+        c = np.sum(wi * m, axis=0)                        # ω_i·m
+        F, c_t = _fresnel_dielectric_np(np.clip(c, 0.0, 1.0), eta_)
+        if transmit:           # ω_t = -ω_i/η + (c/η - c_t) m: into the substrate
+            wo = -wi / eta_ + (c / eta_ - c_t) * m
+            value, keep = 1.0 - F, wo[2] < 0.0
+        else:                  # ω_o = 2 (ω_i·m) m - ω_i
+            wo = 2.0 * c * m - wi
+            value, keep = F, wo[2] > 0.0
+        g1 = _smith_g1(distribution, alpha, wo[2], np.hypot(wo[0], wo[1]))
+        return np.sum(np.where(keep & (c > 0), value * g1, 0.0) * w, axis=1)
+
+    with np.errstate(over="ignore", under="ignore", divide="ignore", invalid="ignore"):
+        t = integral(eta, True)
+        r = 2.0 * float(np.mean(integral(1.0 / eta, False) * mu))
+    return t, r
 
 
 # ----------------------------------------------------------------------------
@@ -240,10 +339,16 @@ def walk_residual(distribution: str, geometry: str,
 # The Fresnel forms (:mod:`.fresnel`) and the parameters each reads beyond
 # ``f0`` (``material`` stands for ``eta`` and ``kappa``).
 FRESNELS = ("schlick", "conductor", "dielectric", "f82")
+BASES = ("lambert", "plastic")
 FRESNEL_PARAMS = {"schlick": (), "conductor": ("eta", "kappa"),
                   "dielectric": ("int_ior", "ext_ior"), "f82": ("f82_tint",)}
 IOR_MIN = 1e-3                   # the smallest index of refraction accepted (> 0)
 STRING = mi.Properties.Type.String
+
+
+def plain(x) -> float:
+    """A plain-number parameter's value as a Python float (an opaque Float in JIT variants)."""
+    return float(x) if isinstance(x, (int, float)) else float(np.array(dr.detach(x)).ravel()[0])
 
 
 def ior_data() -> str:
@@ -287,6 +392,7 @@ class Inputs(NamedTuple):
     microfacet: Microfacet          # D and G at the point's roughness
     f0: Float                       # F0 (also the compensation's table axis)
     fresnel: tuple = ()             # what the Fresnel form reads beyond F0, at the point
+    t_i: Float | None = None        # base="plastic": the transmittance t(cos θ_i)
 
 
 class CookTorrance(BRDF):
@@ -309,6 +415,16 @@ class CookTorrance(BRDF):
                    'the interface ``int_ior``/``ext_ior`` (read as ``roughplastic`` reads '
                    'them); ``"f82"`` Hoffman\'s F82-tint (``f0``, ``f82_tint``): '
                    ':mod:`mi_brdfs.bsdfs.fresnel`.'),
+        Option("base", "lambert", BASES,
+               doc='the diffuse lobe: ``"lambert"`` is the lecture\'s k-weighted Lambert; '
+                   '``"plastic"`` ``roughplastic``\'s substrate seen through the rough '
+                   'dielectric interface (needs ``fresnel="dielectric"``, ``geometry="smith"``, '
+                   '``beckmann`` or ``ggx``, an isotropic constant ``alpha``, ``mode="hdr"``; '
+                   '``k`` is not used: the interface\'s transmittance weighs the substrate).'),
+        Option("nonlinear", False,
+               doc='``base="plastic"``: the internal scattering darkens and saturates the '
+                   "substrate's colour, m_D/(1 - m_D R) instead of m_D/(1 - R), as "
+                   "``roughplastic``'s ``nonlinear``."),
         Option("sample_visible", True,
                doc="Beckmann and GGX: sample the visible normals (else the full distribution "
                    "D(m)·cos θ_m); Blinn always samples the latter."),
@@ -379,6 +495,8 @@ class CookTorrance(BRDF):
             raise reader.error("energy_compensation", True,
                                f'false with fresnel="{form}" (its random-walk reference is '
                                "tabulated for Schlick's F only)")
+        if self.options.base == "plastic":
+            self.check_plastic(reader)
         if "material" in props:
             self.read_material(reader)
         for name in ("int_ior", "ext_ior"):
@@ -391,11 +509,57 @@ class CookTorrance(BRDF):
                 continue                                     # not read by this Fresnel
             if p.name in ("eta", "kappa") and "material" in props:
                 continue
+            if p.name == "k" and self.options.base == "plastic":
+                continue
             if p.name == "alpha" and self.options.distribution == "blinn":
                 p = replace(p, hi=1.0)                       # Blinn: 2/rho² - 2 >= 0
             self.read_param(reader, p)
         if self.options.distribution == "blinn" and self.options.geometry == "smith":
             self.m_g1_blinn = mf.g1_blinn_grid().data        # traversed: frozen functions
+        if self.options.base == "plastic":
+            if self.m_alpha.is_spatially_varying():
+                raise reader.error("alpha", self.m_alpha, 'a constant with base="plastic" (the '
+                                   "transmittance is tabulated for one roughness, as "
+                                   "roughplastic's)")
+            self.update_plastic()
+
+    def check_plastic(self, reader: Reader) -> None:
+        """base="plastic": what roughplastic's base is made of, or one line saying why not."""
+        props, o = reader.props, self.options
+        if "k" in props:
+            raise reader.error("k", props["k"], 'not given with base="plastic" (the substrate '
+                               "is weighed by the interface's transmittance, not by k)")
+        needs = (("fresnel", o.fresnel, "dielectric", "the substrate is seen through the "
+                  "dielectric interface"),
+                 ("geometry", o.geometry, "smith", "the interface's transmittance is that of "
+                  "Smith's microsurface, as roughplastic's"),
+                 ("mode", o.mode, "hdr", "roughplastic's base is radiometric"))
+        for name, value, wanted, why in needs:
+            if value != wanted:
+                raise reader.error(name, value, f'"{wanted}" with base="plastic" ({why})')
+        if o.distribution == "blinn":
+            raise reader.error("distribution", "blinn", '"beckmann" or "ggx" with '
+                               'base="plastic" (as roughplastic)')
+        if self.anisotropic:
+            name = "alpha_u" if "alpha_u" in props else "alpha_v"
+            raise reader.error(name, props[name], 'alpha with base="plastic" (isotropic, as '
+                               "roughplastic)")
+
+    def update_plastic(self) -> None:
+        """The transmittance table and internal reflectance of the interface at
+        the current roughness and index (:func:`plastic_tables`)."""
+        alpha = min(max(value_range(self.m_alpha)[0], mf.ALPHA_MIN), mf.ALPHA_MAX)
+        eta = plain(self.m_int_ior) / plain(self.m_ext_ior)
+        t, r = plastic_tables(self.options.distribution, float(np.float32(alpha)), eta)
+        self.state.plastic = Grid((PLASTIC_MU,), t)
+        self.m_plastic_t = self.state.plastic.data          # traversed: frozen functions
+        self.m_plastic_r = number(r)
+        self.m_inv_eta2 = number(1.0 / (eta * eta))
+
+    def parameters_changed(self, keys=[]):
+        super().parameters_changed(keys)
+        if self.options.base == "plastic":
+            self.update_plastic()
 
     def read_material(self, reader: Reader) -> None:
         """``material``: Mitsuba's measured (η, κ) of a conductor, as ``roughconductor``
@@ -460,9 +624,16 @@ class CookTorrance(BRDF):
                           for name in FRESNEL_PARAMS[o.fresnel] if name not in ("int_ior", "ext_ior"))
             if o.fresnel == "dielectric":
                 reads = (self.m_int_ior / self.m_ext_ior,)
+        t_i = None
+        if o.base == "plastic":
+            t_i = self.transmittance(mi.Frame3f.cos_theta(si.wi))
         return Inputs(self.colour("diffuse_reflectance", "diffuse", si, active),
                       self.colour("specular_reflectance", "specular", si, active),
-                      microfacet, self.m_f0, reads)
+                      microfacet, self.m_f0, reads, t_i)
+
+    def transmittance(self, cos_theta):
+        """base="plastic": t(cos θ), the light the rough interface lets through."""
+        return self.state.plastic(dr.fmin(dr.fmax(cos_theta, 0.0), 1.0), data=self.m_plastic_t)
 
     def fresnel(self, inp, c):
         """F at c = ω_r·h by the chosen form: a Float (``schlick``, ``dielectric``)
@@ -489,11 +660,22 @@ class CookTorrance(BRDF):
         return Scaled(inp.colour_s * F if coloured else inp.colour_s, value, ratio)
 
     def lobe_weights(self, inp):
+        if self.options.base == "plastic":
+            return 1.0, 1.0
         k = self.switch("k")
         return k, 1.0 - k
 
     def eval_diffuse(self, inp, si, wo):
-        return lambert.eval_diffuse(inp.colour_d, mi.Frame3f.cos_theta(wo), self.options.mode)
+        cos_o = mi.Frame3f.cos_theta(wo)
+        if self.options.base == "lambert":
+            return lambert.eval_diffuse(inp.colour_d, cos_o, self.options.mode)
+        # roughplastic's base: m_D/(1 - R) (or m_D/(1 - m_D R), m_D <= 1 in it), entering
+        # and leaving through the interface, t(θ_i) t(θ_o)/η², spread as Lambert's
+        m_d = inp.colour_d
+        inner = dr.fmin(m_d, 1.0) * self.m_plastic_r if self.options.nonlinear \
+            else self.m_plastic_r
+        ratio = inp.t_i * self.transmittance(cos_o) * self.m_inv_eta2
+        return Scaled(m_d / (1.0 - inner), ratio * (cos_o * (1.0 / math.pi)), ratio)
 
     def eval_specular(self, inp, si, wo):
         h = half_vector(si.wi, wo)
@@ -515,6 +697,13 @@ class CookTorrance(BRDF):
     def selection_weights(self, inp, si):
         w_d = w_s = mi.Float(0.0)
         lobes = self.state.plan.lobes
+        if self.options.base == "plastic":
+            # roughplastic's: the substrate in proportion to t(θ_i)·mean(m_D), the
+            # interface to (1 - t(θ_i))·mean(m_S), each mean over the sum of both
+            m_d, m_s = mean(inp.colour_d), mean(inp.colour_s)
+            total = m_d + m_s
+            s_w = dr.select(total > 0.0, m_s / dr.select(total > 0.0, total, 1.0), 0.5)
+            return inp.t_i * (1.0 - s_w), (1.0 - inp.t_i) * s_w
         if lobes.diffuse:
             w_d = self.m_k * lambert.albedo(mean(inp.colour_d), self.options.mode)
         if lobes.specular:
@@ -726,6 +915,26 @@ class CookTorrance(BRDF):
                                {"fresnel": "f82", "f0": 0.0, "f82_tint": 0.0},
                                {"fresnel": "f82", "f0": 1.0, "f82_tint": 0.0})
                      for a in (1e-4, 1.0) for k in (0.0, 0.5) for g in mf.GEOMETRIES]
+        # roughplastic's base (its table of the interface's transmittance is not
+        # differentiated: no gradient cases, as roughplastic's)
+        plastic = {**c, "base": "plastic", "fresnel": "dielectric", "geometry": "smith"}
+        chi2 += [Chi2({**plastic, "distribution": d, "alpha": a, "mode": "hdr"}, (0, 60, 85))
+                 for d, a in (("ggx", 0.1), ("beckmann", 0.4))]
+        consistency += [{**plastic, "distribution": d, "alpha": a, "mode": "hdr", **more}
+                        for d, a, more in (("ggx", 0.1, {}), ("beckmann", 0.3, {"nonlinear": True}),
+                                           ("ggx", 0.5, {"diffuse_reflectance": rgb([0.8, 0.2, 0.1]),
+                                                         "specular_reflectance": 0.5,
+                                                         "int_ior": "bk7"}))]
+        furnace += [Furnace(f"plastic base, {d}, α = {a}, η = {eta}, m_D = m_S = 1",
+                            {**plastic, "distribution": d, "alpha": a, "int_ior": eta,
+                             "ext_ior": 1.0, "diffuse_reflectance": 1.0,
+                             "specular_reflectance": 1.0, "mode": "hdr"}, hi=1.0 + 2e-3)
+                    for d, a, eta in (("ggx", 0.1, 1.5), ("ggx", 0.6, 1.33), ("beckmann", 0.3, 2.0))]
+        extremes += [{**plastic, "distribution": "ggx", "alpha": a, "mode": "hdr", **more}
+                     for a in (1e-4, 1.0, 1e3)
+                     for more in ({}, {"nonlinear": True, "diffuse_reflectance": 1.0},
+                                  {"int_ior": 1e-3, "ext_ior": 1.0}, {"int_ior": 1e3},
+                                  {"diffuse_reflectance": 0.0}, {"specular_reflectance": 0.0})]
         interior = [{**c, "distribution": "ggx", "geometry": "smith", "alpha": 0.4, "k": 0.4,
                      "diffuse_reflectance": 0.5, "specular_reflectance": 0.7, **f}
                     for f in ({"fresnel": "conductor", "eta": 1.3, "kappa": 2.0},
@@ -757,7 +966,9 @@ class CookTorrance(BRDF):
                 "specular_reflectance": rgb([0.95, 0.64, 0.54]), "f0": 0.4}
                for d in ("beckmann", "ggx")]
             + [{**c, **f, "distribution": "ggx", "geometry": "smith", "alpha": 0.3, "k": 0.2}
-               for f in forms],
+               for f in forms]
+            + [{**plastic, "distribution": "ggx", "alpha": 0.3, "mode": "hdr",
+                "diffuse_reflectance": rgb([0.8, 0.2, 0.1])}],
             lobe={**c, "distribution": "ggx", "alpha": 0.3, "k": 0.3, "f0": 0.5,
                   "diffuse_reflectance": 0.8},
             costs=[(f"cook_torrance {d} {g}", {**c, "distribution": d, "geometry": g, "alpha": 0.3})

@@ -1,8 +1,9 @@
-"""cook_torrance's Fresnel forms (``fresnel``): each against an independent
-NumPy transcription of its formula, and the exact conductor against Mitsuba's
-``roughconductor`` (eval, pdf and sample, RGB and spectral). What every
-option shares (χ², furnace, reciprocity, extremes, bad values): the battery,
-through cook_torrance's cases."""
+"""cook_torrance's Fresnel forms (``fresnel``) and plastic base (``base``):
+each Fresnel form against an independent NumPy transcription of its formula,
+the exact conductor against Mitsuba's ``roughconductor`` (eval, pdf and
+sample, RGB and spectral), the dielectric with the plastic base against
+``roughplastic``. What every option shares (χ², furnace, reciprocity,
+extremes, bad values): the battery, through cook_torrance's cases."""
 import math
 
 import numpy as np
@@ -101,7 +102,7 @@ def at(si):
     return si
 
 
-def compare(ours, theirs, rng, rtol, n=8192):
+def compare(ours, theirs, rng, rtol, n=8192, pdf_rtol=None):
     """eval and pdf of two BSDFs at the same random viewers and lights; and
     ours's samples (direction, pdf, weight) against theirs's pdf and eval / pdf
     at the direction ours sampled (the two samplers map the random numbers to
@@ -117,14 +118,17 @@ def compare(ours, theirs, rng, rtol, n=8192):
     assert big.sum() > 1000
     np.testing.assert_allclose(v[big], v_[big], rtol=rtol)
     np.testing.assert_allclose(v, v_, rtol=rtol, atol=1e-5 * v_.max())
-    np.testing.assert_allclose(p, p_, rtol=rtol, atol=1e-6)
+    pdf_rtol = pdf_rtol or rtol
+    np.testing.assert_allclose(p, p_, rtol=pdf_rtol, atol=1e-6)
     bs, weight = ours.sample(ctx, si, floats(rng.random(n)), points(rng.random(n), rng.random(n)))
     q, w = to_np(bs.pdf), to_np(weight)
     q_, f_ = to_np(theirs.pdf(ctx, si, bs.wo)), to_np(theirs.eval(ctx, si, bs.wo))
-    ok = q_ > 1e-3
-    assert ok.mean() > 0.5
-    np.testing.assert_allclose(q[ok], q_[ok], rtol=rtol)
-    np.testing.assert_allclose(w[..., ok], f_[..., ok] / q_[ok], rtol=rtol, atol=1e-6)
+    # (where ours failed, a reflection below the surface, it reports pdf 0 and wo = 0)
+    ok = (q_ > 1e-3) & (q > 0)
+    assert ok.mean() > 0.5 and (q > 0).mean() > 0.9
+    np.testing.assert_allclose(q[ok], q_[ok], rtol=pdf_rtol)
+    np.testing.assert_allclose(w[..., ok], f_[..., ok] / q_[ok], rtol=max(rtol, pdf_rtol),
+                               atol=1e-6)
     return v_
 
 
@@ -226,6 +230,71 @@ def test_dielectric_matches_numpy(rng, int_ior, ext_ior, eta):
 
 
 # ----------------------------------------------------------------------------
+#  The plastic base is roughplastic's
+# ----------------------------------------------------------------------------
+
+def roughplastic_tables(distribution: str, alpha: float, eta: float):
+    """roughplastic's own t(μ) at the 64 nodes μ_j and internal reflectance R,
+    read back from its diffuse lobe: m_D/(1 - R)·t(μ_i) t(μ_o) μ_o/(π η²), and
+    m_D/(1 - m_D R)·... with ``nonlinear`` (m_D = 0.5): their ratio at one pair
+    of directions gives R, then t(1) and t(μ_j)."""
+    mu = np.maximum(np.linspace(0.0, 1.0, 64), 1e-6)
+    wi = np.stack([np.sqrt(1.0 - mu * mu), 0.0 * mu, mu], axis=1)
+    up = np.tile([[0.0, 0.0, 1.0]], (64, 1))
+    ctx = mi.BSDFContext()
+    ctx.component = 1                                     # its diffuse lobe
+    def f(nonlinear, a, b):
+        bsdf = mi.load_dict({"type": "roughplastic", "distribution": distribution,
+                             "alpha": alpha, "int_ior": eta, "ext_ior": 1.0,
+                             "diffuse_reflectance": 0.5, "nonlinear": nonlinear})
+        return eval_and_pdf(bsdf, a, b, ctx=ctx)[0][:, 0]
+    lin, non = f(False, up, up)[0], f(True, up, up)[0]
+    q = lin / non                                         # (1 - R/2)/(1 - R)
+    R = (q - 1.0) / (q - 0.5)
+    K = 0.5 / (1.0 - R) / np.pi / eta**2
+    t1 = math.sqrt(lin / K)
+    return f(False, wi, up) / K / t1, R
+
+
+@pytest.mark.parametrize("distribution, alpha, eta", [("ggx", 0.01, 1.5), ("ggx", 0.1, 1.49),
+                                                      ("ggx", 1.0, 1.2), ("beckmann", 0.3, 1.5)])
+def test_plastic_tables_are_roughplastics(distribution, alpha, eta):
+    """Our quadrature of the interface's transmittance (slopes, Gauss-Legendre
+    in tan) and roughplastic's (visible normals, Gauss-Legendre in the sample
+    square) of the same integrals: within 4e-4 (measured 1.9e-4 to 3.6e-4,
+    Beckmann's G1 fit included), and R within 5e-4 (measured 2.2e-4)."""
+    from mi_brdfs.bsdfs.cook_torrance import plastic_tables
+    t, r = plastic_tables(distribution, alpha, eta)
+    t_ref, r_ref = roughplastic_tables(distribution, alpha, eta)
+    np.testing.assert_allclose(t, t_ref, atol=4e-4)
+    assert r == pytest.approx(r_ref, abs=5e-4)
+    assert 0.0 < t.min() and t.max() < 1.0
+
+
+PLASTICS = [("ggx", 0.1, {}), ("ggx", 0.4, {"nonlinear": True}),
+            ("ggx", 0.2, {"specular_reflectance": rgb([0.5, 0.7, 0.9]),
+                          "diffuse_reflectance": rgb([0.8, 0.2, 0.1]), "int_ior": "bk7"}),
+            ("beckmann", 0.3, {})]
+
+
+@pytest.mark.parametrize("distribution, alpha, more", PLASTICS,
+                         ids=lambda x: x if isinstance(x, str) else None)
+def test_plastic_equals_roughplastic(rng, distribution, alpha, more):
+    """fresnel="dielectric", base="plastic": eval, pdf and sample weights equal
+    roughplastic's up to the two quadratures of t and R (above): eval within
+    1e-3 relative for GGX (measured 7e-4), the pdf within 6e-3 (its lobe choice
+    holds 1 - t(θ_i), whose relative error grows where t -> 1); Beckmann within
+    7e-3 (its G1 fit, test_cook_torrance.RTOL)."""
+    ours = mi.load_dict({"type": "cook_torrance", "base": "plastic", "fresnel": "dielectric",
+                         "geometry": "smith", "distribution": distribution, "alpha": alpha,
+                         **more})
+    theirs = mi.load_dict({"type": "roughplastic", "distribution": distribution, "alpha": alpha,
+                           **more})
+    rtol = {"ggx": 1e-3, "beckmann": 7e-3}[distribution]
+    compare(ours, theirs, rng, rtol, pdf_rtol=6e-3 if distribution == "ggx" else 1e-2)
+
+
+# ----------------------------------------------------------------------------
 #  Bad input: one line
 # ----------------------------------------------------------------------------
 
@@ -242,6 +311,19 @@ def test_dielectric_matches_numpy(rng, int_ior, ext_ior, eta):
     ({"fresnel": "conductor", "energy_compensation": True}, "energy_compensation", "True",
      "Schlick's F only"),
     ({"fresnel": "f82", "f82_tint": 1.5}, "f82_tint", "1.5", "[0, 1]"),
+    ({"base": "plastic", "fresnel": "dielectric", "geometry": "smith", "k": 0.5}, "k", "0.5",
+     "not given with base=\"plastic\""),
+    ({"base": "plastic", "geometry": "smith"}, "fresnel", "'schlick'", '"dielectric"'),
+    ({"base": "plastic", "fresnel": "dielectric"}, "geometry", "'cook_torrance'", '"smith"'),
+    ({"base": "plastic", "fresnel": "dielectric", "geometry": "smith", "mode": "scanline"},
+     "mode", "'scanline'", '"hdr"'),
+    ({"base": "plastic", "fresnel": "dielectric", "geometry": "smith", "distribution": "blinn"},
+     "distribution", "'blinn'", '"beckmann" or "ggx"'),
+    ({"base": "plastic", "fresnel": "dielectric", "geometry": "smith", "alpha_u": 0.1},
+     "alpha_u", "0.1", "isotropic"),
+    ({"base": "plastic", "fresnel": "dielectric", "geometry": "smith",
+      "alpha": {"type": "checkerboard", "color0": 0.1, "color1": 0.2}}, "alpha",
+     "a texture (Checkerboard)", "a constant"),
 ])
 def test_bad_input_is_one_line(given, name, value, valid):
     assert_refused({"type": "cook_torrance", **given}, name, value, valid)

@@ -294,6 +294,21 @@ def test_plastic_equals_roughplastic(rng, distribution, alpha, more):
     compare(ours, theirs, rng, rtol, pdf_rtol=6e-3 if distribution == "ggx" else 1e-2)
 
 
+def test_plastic_attributes_are_roughplastics():
+    """The diffuse colour and the roughness read back as roughplastic's
+    (``eval_attribute``; the other checks of Mitsuba's roughplastic tests,
+    χ² and eval_pdf, are in the battery's cases)."""
+    common = {"diffuse_reflectance": rgb([0.5, 0.6, 0.7]), "alpha": 0.4}
+    ours = mi.load_dict({"type": "cook_torrance", "base": "plastic", "fresnel": "dielectric",
+                         "geometry": "smith", **common})
+    theirs = mi.load_dict({"type": "roughplastic", **common})
+    si = dr.zeros(mi.SurfaceInteraction3f)
+    for bsdf in (ours, theirs):
+        assert np.allclose(np.array(bsdf.eval_attribute("diffuse_reflectance", si)).ravel(),
+                           [0.5, 0.6, 0.7])
+        assert np.allclose(np.array(bsdf.eval_attribute_1("alpha", si)).ravel(), 0.4)
+
+
 # ----------------------------------------------------------------------------
 #  Bad input: one line
 # ----------------------------------------------------------------------------

@@ -38,7 +38,7 @@ number ``f0``; a colour comes from m_S. The other forms are what it approximates
   weight). The hue of a metal shifts towards white at grazing angles, which
   Schlick's F0 times a colour does not do. With ``k`` = 0 and
   ``geometry="smith"`` the lobe is ``roughconductor``'s (eval, pdf and sample
-  weights equal, isotropic and anisotropic: tests/bsdfs/test_fresnel.py).
+  weights equal, isotropic and anisotropic, measured by the tests).
 - ``"dielectric"``: the exact reflectance of the interface ``int_ior`` /
   ``ext_ior`` (numbers, or Mitsuba's names such as ``"bk7"``, as
   ``roughplastic`` reads them), the F of ``roughplastic``'s specular lobe.
@@ -72,7 +72,7 @@ quadrature of its visible normals (:func:`plastic_tables`; within 4e-4 of
 ``k`` is not used (a given ``k`` is refused), and a sample picks the substrate
 with the probability ``roughplastic`` gives it, t(θ_i) mean(m_D) against
 (1 - t(θ_i)) mean(m_S). Eval equals ``roughplastic``'s within 1e-3 for GGX,
-the pdf within 6e-3 (tests/bsdfs/test_fresnel.py). It needs ``geometry="smith"``,
+the pdf within 6e-3. It needs ``geometry="smith"``,
 ``beckmann`` or ``ggx``, one constant isotropic ``alpha`` and ``mode="hdr"``,
 as ``roughplastic``; the table is not differentiated (as there).
 

@@ -527,7 +527,6 @@ class CookTorrance(BRDF):
         for name in ("int_ior", "ext_ior"):
             if name in props and props.type(name) == STRING:
                 props[name] = self.lookup_ior(reader, name)
-        self.warn_unused(props)
         for p in self.PARAMS:
             if p.name.startswith("alpha") and p.name not in given:
                 continue
@@ -548,20 +547,6 @@ class CookTorrance(BRDF):
                                    "transmittance is tabulated for one roughness, as "
                                    "roughplastic's)")
             self.update_plastic()
-
-    def warn_unused(self, props) -> None:
-        """A parameter given that the chosen forms do not read is read and
-        checked (a scene may switch the form) but has no effect: say so once."""
-        form, used = self.options.fresnel, set(FRESNEL_PARAMS[self.options.fresnel])
-        if form in ("schlick", "f82"):
-            used.add("f0")
-        unused = [name for names in FRESNEL_PARAMS.values() for name in names + ("f0",)
-                  if name in props and name not in used]
-        if self.options.nonlinear and self.options.base != "plastic":
-            unused.append("nonlinear")
-        for name in dict.fromkeys(unused):
-            mi.Log(mi.LogLevel.Warn, f'{self.name}: parameter \'{name}\' has no effect with '
-                   f'fresnel="{form}", base="{self.options.base}"')
 
     def check_plastic(self, reader: Reader) -> None:
         """base="plastic": what roughplastic's base is made of, or one line saying why not."""

@@ -439,7 +439,8 @@ class CookTorrance(BRDF):
                    '``roughconductor`` reads them); ``"dielectric"`` the exact reflectance of '
                    'the interface ``int_ior``/``ext_ior`` (read as ``roughplastic`` reads '
                    'them); ``"f82"`` Hoffman\'s F82-tint (``f0``, ``f82_tint``): '
-                   ':mod:`mi_brdfs.bsdfs.fresnel`.'),
+                   ':mod:`mi_brdfs.bsdfs.fresnel`. A parameter of another form, if given, is '
+                   'checked and has no effect.'),
         Option("base", "lambert", BASES,
                doc='the diffuse lobe: ``"lambert"`` is the lecture\'s k-weighted Lambert; '
                    '``"plastic"`` ``roughplastic``\'s substrate seen through the rough '
@@ -467,7 +468,7 @@ class CookTorrance(BRDF):
                   "refraction (a colour, or a spectrum), as ``roughconductor``'s ``eta``; "
                   "default 0 with ``kappa`` 1, the perfect mirror (F = 1), as there. Or give "
                   "``material``, a string naming Mitsuba's measured data (``Au``, ``Cu``, "
-                  "``Al``, ...: its ``data/ior``), not both. Read only with that Fresnel."),
+                  "``Al``, ...: its ``data/ior``), not both."),
         Param("kappa", 1.0, 0.0, None, role="shape", upper=5.0, optional=True,
               doc='``fresnel="conductor"``: κ, the extinction coefficient, the imaginary '
                   "part of the index (``roughconductor``'s ``k``, renamed: the lecture's "

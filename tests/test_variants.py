@@ -312,14 +312,14 @@ def test_plain_numbers_read_as_floats_in_scalar_variants():
         plain = [(cls.name, p) for cls in PLUGINS for p in cls.PARAMS if p.kind == "float"]
         assert plain                                     # (k, f0, smoothness)
         for name, p in plain:
-            bsdf = mi.load_dict({"type": name})
+            bsdf = mi.load_dict({"type": name, p.name: p.default})     # (optional ones: given)
             params = mi.traverse(bsdf)
             assert type(params[p.name]) is float, (name, p.name, type(params[p.name]))
-            value = 0.5 * (p.lo + p.hi)
+            value = 0.5 * (p.lo + p.probe_hi())
             params[p.name] = value
             params.update()
             assert params[p.name] == pytest.approx(value)
             assert getattr(bsdf, "m_" + p.name) == pytest.approx(value)
-            params[p.name] = p.hi + 1.0
+            params[p.name] = p.hi + 1.0 if p.hi is not None else p.lo - 1.0
             with pytest.raises(ParameterError, match=f"{name}: parameter '{p.name}'"):
                 params.update()

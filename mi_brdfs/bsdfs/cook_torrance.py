@@ -26,6 +26,56 @@ k·mean(m_D) (pi·k·mean(m_D) in scanline mode, whose Lambert term has no 1/pi)
 vs (1 - k)·mean(m_S)·Schlick(w_r·n). With k = 0 (or m_D = 0) there
 is no diffuse lobe, with k = 1 (or m_S = 0) no specular one.
 
+**Fresnel** (``fresnel``, :mod:`mi_brdfs.bsdfs.fresnel`): the lecture's
+F is Schlick's, ``"schlick"`` (the default), F0 + (1 - F0)(1 - ω_r·h)^5 with one
+number ``f0``; a colour comes from m_S. The other forms are what it approximates:
+
+- ``"conductor"``: the exact reflectance of a conductor of complex index
+  η + iκ, per colour channel (per wavelength in spectral variants), read as
+  Mitsuba's ``roughconductor`` reads it: ``material`` (a name of Mitsuba's
+  measured data, e.g. ``Au``, ``Cu``, ``Al``; the same data) or ``eta`` and
+  ``kappa`` (``roughconductor``'s ``k``: here ``k`` is the lecture's diffuse
+  weight). The hue of a metal shifts towards white at grazing angles, which
+  Schlick's F0 times a colour does not do. With ``k`` = 0 and
+  ``geometry="smith"`` the lobe is ``roughconductor``'s (eval, pdf and sample
+  weights equal, isotropic and anisotropic, measured by the tests).
+- ``"dielectric"``: the exact reflectance of the interface ``int_ior`` /
+  ``ext_ior`` (numbers, or Mitsuba's names such as ``"bk7"``, as
+  ``roughplastic`` reads them), the F of ``roughplastic``'s specular lobe.
+- ``"f82"``: Hoffman's F82-tint (N. Hoffman, *Generalization of Adobe's
+  Fresnel Model*, 2023; the metal of OpenPBR and Adobe's Standard Material):
+  Schlick's curve with the reflectance near 82° set to ``f82_tint`` times
+  Schlick's there, a colour, between Schlick and the exact conductor.
+
+With a coloured F (conductor, F82) the F of each direction multiplies m_S.
+Energy compensation is for Schlick's F only (its random-walk tables are over
+F0): with another form it is refused at load time.
+
+**Base** (``base``): the lecture's diffuse lobe is ``"lambert"`` (the
+default), k·m_D/π beside (1 - k) times the specular lobe. ``"plastic"`` is
+Mitsuba's ``roughplastic`` base, a diffuse substrate under the rough dielectric
+interface of ``fresnel="dielectric"``: light enters through the interface,
+scatters in the substrate, is reflected back down by the interface's inside
+(R, total internal reflection included) and leaves through it again,
+
+.. math::
+
+    f_\text{base}\cos\theta_o = \frac{m_D}{1 - R}\,
+        \frac{t(\theta_i)\,t(\theta_o)}{\pi\,\eta^2}\cos\theta_o,
+    \qquad \frac{m_D}{1 - m_D R}\ \text{with}\ ``nonlinear``,
+
+t(θ) the light the rough interface transmits (Smith-masked, its
+dielectric F), tabulated at load time over 64 values of cos θ by our own
+quadrature of its visible normals (:func:`plastic_tables`; within 4e-4 of
+``roughplastic``'s own table), R = 2∫R_in(μ) μ dμ over the same nodes, as
+``roughplastic`` sums it. The interface's transmittance weighs the substrate:
+``k`` is not used (a given ``k`` is refused), and a sample picks the substrate
+with the probability ``roughplastic`` gives it, t(θ_i) mean(m_D) against
+(1 - t(θ_i)) mean(m_S). Eval equals ``roughplastic``'s within 1e-3 for GGX,
+the pdf within 6e-3. It needs ``geometry="smith"``,
+``beckmann`` or ``ggx``, one constant isotropic ``alpha`` and ``mode="hdr"``,
+as ``roughplastic``; the table is not differentiated (as there).
+
 **Energy compensation** (``energy_compensation``): the reciprocal
 multiple-scattering lobe of Kulla & Conty 2017 / Turquin 2019
 (:mod:`mi_brdfs.bsdfs.compensation`) whose albedo is what single scattering misses
@@ -51,24 +101,41 @@ anisotropic microsurface (held beyond α = 3 on either axis).
         <string name="distribution" value="ggx"/>
         <string name="geometry" value="smith"/>
     </bsdf>
+
+The exact conductor, as ``roughconductor`` with ``material`` gold:
+
+.. code-block:: xml
+
+    <bsdf type="cook_torrance">
+        <float name="k" value="0"/>
+        <string name="geometry" value="smith"/>
+        <string name="distribution" value="ggx"/>
+        <string name="fresnel" value="conductor"/>
+        <string name="material" value="Au"/>
+        <float name="alpha" value="0.2"/>
+    </bsdf>
 """
 from __future__ import annotations
 
+import functools
 import math
+import os
 from dataclasses import replace
 from typing import NamedTuple
 
 import drjit as dr
 import mitsuba as mi
+import numpy as np
 
+from .._binding import create
 from . import compensation, fresnel, lambert, microfacet as mf
 from .base import BRDF, Effective, rgb_list, schlick
 from .cases import (THETAS_GRAZING, THETAS_LOW, Cases, Chi2, Furnace, Pictures, Twin, preserves,
                     rgb)
-from .grid import Axis
+from .grid import Axis, Grid
 from .microfacet import Microfacet, dot, half_vector
 from .mixture import Float, Scaled, Spectrum, mean
-from .params import Option, Param, Reader
+from .params import Option, Param, Reader, number, value_range
 
 
 # ----------------------------------------------------------------------------
@@ -76,19 +143,21 @@ from .params import Option, Param, Reader
 # ----------------------------------------------------------------------------
 
 def eval_specular(wi, wo, microfacet: Microfacet, f0, geometry: str):
-    """The specular lobe at wo, D F G / (4 cos θ_i), and its ratio to
-    :func:`pdf_specular` where that is known in closed form (F G1(ω_o), for
-    visible normals with Smith's G; else None).
+    """The specular lobe at wo, D F G / (4 cos θ_i) with Schlick's F, and its
+    ratio to :func:`pdf_specular` where that is known in closed form (F G1(ω_o),
+    for visible normals with Smith's G; else None).
 
     The same in both modes: the lecture's scanline f_specular is
     m_S D F G / (4 clamp(ω_r·n)), and the hdr BRDF m_S D F G / (4 (ω_r·n)(d·n))
     times the cos θ_o of Mitsuba's ``eval`` is the same."""
     h = half_vector(wi, wo)
-    return _specular(wi, wo, h, microfacet.D(h), microfacet, f0, geometry)
+    return _specular(wi, wo, h, microfacet.D(h), microfacet, fresnel.schlick(f0, dot(wi, h)),
+                     geometry)
 
 
-def _specular(wi, wo, h, D, microfacet: Microfacet, f0, geometry: str):
-    F = fresnel.schlick(f0, dot(wi, h))
+def _specular(wi, wo, h, D, microfacet: Microfacet, F, geometry: str):
+    """D F G / (4 cos θ_i) and its closed-form ratio to the pdf (see
+    :func:`eval_specular`), F a Float or the number 1."""
     if geometry == "smith":
         # G / cos θ_i = G1(ω_o) · G1(ω_i)/cos θ_i: no division by a cosine that -> 0
         F_G1_o = F * microfacet.G1(wo)
@@ -108,7 +177,7 @@ def eval_pdf_specular(wi, wo, microfacet: Microfacet, f0, geometry: str):
     material at every call."""
     h = half_vector(wi, wo)
     D = microfacet.D(h)
-    value, ratio = _specular(wi, wo, h, D, microfacet, f0, geometry)
+    value, ratio = _specular(wi, wo, h, D, microfacet, fresnel.schlick(f0, dot(wi, h)), geometry)
     return value, ratio, microfacet.reflection_pdf(wi, wo, h, D)
 
 
@@ -122,6 +191,104 @@ def pdf_specular(wi, wo, microfacet: Microfacet):
     """The density of :func:`sample_specular` at wo: that of m at the half
     vector, pdf(m) / (4 ω_o·m) (:meth:`.Microfacet.reflection_pdf`)."""
     return microfacet.reflection_pdf(wi, wo, half_vector(wi, wo))
+
+
+# ----------------------------------------------------------------------------
+#  The plastic base: the substrate seen through the rough dielectric interface
+# ----------------------------------------------------------------------------
+
+# As Mitsuba's roughplastic (3.9.1): the transmittance t(μ) through the interface
+# on 64 nodes of μ = cos θ in [0, 1] (the first at μ = 1e-6), interpolated linearly;
+# the internal reflectance 2·mean(R(μ_j) μ_j) over the same nodes.
+PLASTIC_MU = Axis("mu", 0.0, 1.0, 64)
+PLASTIC_NODES = 64               # Gauss-Legendre nodes per slope axis of the quadrature
+
+
+def _erf(x):
+    """erf of a NumPy array (Abramowitz & Stegun 7.1.26, within 1.5e-7)."""
+    t = 1.0 / (1.0 + 0.3275911 * np.abs(x))
+    poly = t * (0.254829592 + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027
+                                                                          + t * 1.061405429))))
+    return np.sign(x) * (1.0 - poly * np.exp(-x * x))
+
+
+def _smith_g1(distribution: str, alpha: float, z, r):
+    """Smith's G1 of a direction with cos θ = |z| (r = sin θ), NumPy."""
+    tan2 = (r / np.maximum(np.abs(z), 1e-300)) ** 2
+    if distribution == "ggx":
+        return 2.0 / (1.0 + np.sqrt(1.0 + alpha * alpha * tan2))
+    a = 1.0 / np.maximum(alpha * np.sqrt(tan2), 1e-300)
+    return 2.0 / (1.0 + _erf(a) + np.exp(-a * a) / (a * math.sqrt(math.pi)))
+
+
+def _fresnel_dielectric_np(c, eta):
+    """The exact dielectric reflectance (light from outside, relative index η), NumPy."""
+    s2_t = (1.0 - c * c) / (eta * eta)
+    c_t = np.sqrt(np.maximum(1.0 - s2_t, 0.0))
+    r_s = (c - eta * c_t) / np.maximum(c + eta * c_t, 1e-300)
+    r_p = (eta * c - c_t) / np.maximum(eta * c + c_t, 1e-300)
+    return np.where(s2_t < 1.0, 0.5 * (r_s * r_s + r_p * r_p), 1.0), c_t
+
+
+def _visible_normals(distribution: str, alpha: float, mu: np.ndarray):
+    """Quadrature of the normals visible from ω = (sin θ, 0, μ) (Heitz 2014:
+    D_ω(m) = G1(ω) max(0, ω·m) D(m) / μ), in the slopes (p, q) = α (x, y) of
+    m ∝ (-p, -q, 1), where D(m) dω_m = P22 / cos θ_m dp dq and ω·m / cos θ_m
+    = μ - p sin θ: x over (-∞, μ/(α sin θ)) (where ω·m > 0), y over ℝ, each by
+    Gauss-Legendre in tan. Returns (m, w): normals (3, len(mu), n²) and their
+    weights (summing to 1 over each viewer's normals, up to the quadrature)."""
+    nodes, weights = np.polynomial.legendre.leggauss(PLASTIC_NODES)
+    u, w_u = 0.5 * (nodes + 1.0), 0.5 * weights          # on (0, 1)
+    sin_t = np.sqrt(1.0 - mu * mu)[:, None, None]
+    mu3 = mu[:, None, None]
+    # x = tan φ, φ from -π/2 to atan(x0) (π/2 at the normal, where x0 = ∞)
+    top = np.arctan2(mu3, alpha * sin_t)
+    phi = -0.5 * np.pi + (top + 0.5 * np.pi) * u[None, :, None]
+    x = np.tan(phi)
+    dx = (top + 0.5 * np.pi) / np.cos(phi) ** 2 * w_u[None, :, None]
+    psi = 0.5 * np.pi * (2.0 * u - 1.0)
+    y = np.tan(psi)[None, None, :]
+    dy = (np.pi / np.cos(psi) ** 2 * w_u)[None, None, :]
+    r2 = x * x + y * y
+    p22 = (1.0 / (np.pi * (1.0 + r2) ** 2) if distribution == "ggx"
+           else np.exp(-r2) / np.pi)                     # P22 in the scaled slopes
+    lam = np.maximum(mu3 - alpha * x * sin_t, 0.0)        # ω·m / cos θ_m
+    g1 = _smith_g1(distribution, alpha, mu3, sin_t)
+    w = g1 / np.maximum(mu3, 1e-300) * p22 * lam * dx * dy
+    norm = 1.0 / np.sqrt(1.0 + alpha * alpha * r2)
+    m = np.stack(np.broadcast_arrays(-alpha * x * norm, -alpha * y * norm, norm))
+    n = len(mu)
+    return m.reshape(3, n, -1), w.reshape(n, -1)
+
+
+@functools.lru_cache(maxsize=64)
+def plastic_tables(distribution: str, alpha: float, eta: float) -> tuple[np.ndarray, float]:
+    """(t, R): the transmittance through the rough dielectric interface of
+    relative index η (Smith's G1 masks the refracted ray) at the nodes of
+    :data:`PLASTIC_MU`, and the internal reflectance, the light the substrate
+    sends up that the interface reflects back (its 1/η Fresnel, total internal
+    reflection included), as ``roughplastic`` defines them."""
+    mu = np.maximum(PLASTIC_MU.nodes(), 1e-6)
+    sin_t = np.sqrt(1.0 - mu * mu)
+    wi = np.stack([sin_t, np.zeros_like(mu), mu])[:, :, None]
+
+    def integral(eta_: float, transmit: bool) -> np.ndarray:
+        m, w = _visible_normals(distribution, alpha, mu)
+        c = np.sum(wi * m, axis=0)                        # ω_i·m
+        F, c_t = _fresnel_dielectric_np(np.clip(c, 0.0, 1.0), eta_)
+        if transmit:           # ω_t = -ω_i/η + (c/η - c_t) m: into the substrate
+            wo = -wi / eta_ + (c / eta_ - c_t) * m
+            value, keep = 1.0 - F, wo[2] < 0.0
+        else:                  # ω_o = 2 (ω_i·m) m - ω_i
+            wo = 2.0 * c * m - wi
+            value, keep = F, wo[2] > 0.0
+        g1 = _smith_g1(distribution, alpha, wo[2], np.hypot(wo[0], wo[1]))
+        return np.sum(np.where(keep & (c > 0), value * g1, 0.0) * w, axis=1)
+
+    with np.errstate(over="ignore", under="ignore", divide="ignore", invalid="ignore"):
+        t = integral(eta, True)
+        r = 2.0 * float(np.mean(integral(1.0 / eta, False) * mu))
+    return t, r
 
 
 # ----------------------------------------------------------------------------
@@ -194,12 +361,63 @@ def walk_residual(distribution: str, geometry: str,
                                       walk_spec(distribution, anisotropic))
 
 
+# The Fresnel forms (:mod:`.fresnel`) and the parameters each reads beyond
+# ``f0`` (``material`` stands for ``eta`` and ``kappa``).
+FRESNELS = ("schlick", "conductor", "dielectric", "f82")
+BASES = ("lambert", "plastic")
+FRESNEL_PARAMS = {"schlick": (), "conductor": ("eta", "kappa"),
+                  "dielectric": ("int_ior", "ext_ior"), "f82": ("f82_tint",)}
+IOR_MIN = 1e-3                   # the smallest index of refraction accepted (> 0)
+STRING = mi.Properties.Type.String
+
+
+def plain(x) -> float:
+    """A plain-number parameter's value as a Python float (an opaque Float in JIT variants)."""
+    return float(x) if isinstance(x, (int, float)) else float(np.array(dr.detach(x)).ravel()[0])
+
+
+def ior_data() -> str:
+    """The folder of Mitsuba's measured complex indices (``<name>.eta.spd``,
+    ``<name>.k.spd``), the data ``roughconductor``'s ``material`` reads."""
+    return os.path.join(os.path.dirname(mi.__file__), "data", "ior")
+
+
+def materials() -> list[str]:
+    """The conductor names Mitsuba has data for (``roughconductor``'s ``material``)."""
+    return sorted(f[:-len(".eta.spd")] for f in os.listdir(ior_data()) if f.endswith(".eta.spd"))
+
+
+def material_textures(name: str) -> tuple:
+    """(η, κ) of Mitsuba's material ``name`` as textures holding what
+    ``roughconductor`` holds for it: in spectral variants the measured spectra
+    themselves; else the colour (or, mono, the value) ``roughconductor``
+    reduces them to, read from one through ``eval_attribute``."""
+    folder = ior_data()
+    if mi.is_spectral:
+        out = []
+        for part in ("eta", "k"):
+            wavelengths, values = mi.spectrum_from_file(os.path.join(folder, f"{name}.{part}.spd"))
+            out.append(create("irregular", {"wavelengths": ", ".join(map(repr, wavelengths)),
+                                            "values": ", ".join(map(repr, values))}))
+        return tuple(out)
+    reference = create("roughconductor", {"material": name})
+    si = dr.zeros(mi.SurfaceInteraction3f)
+    out = []
+    for part in ("eta", "k"):
+        value = [float(x) for x in np.array(reference.eval_attribute(part, si)).ravel()]
+        out.append(create("uniform", {"value": value[0]}) if len(value) == 1 else
+                   create("srgb", {"color": mi.ScalarColor3f(value), "unbounded": True}))
+    return tuple(out)
+
+
 class Inputs(NamedTuple):
     """What one call evaluates at its point."""
     colour_d: Spectrum | None       # m_D, where the diffuse lobe is present
     colour_s: Spectrum | None       # m_S, where the specular lobe is present
     microfacet: Microfacet          # D and G at the point's roughness
     f0: Float                       # F0 (also the compensation's table axis)
+    fresnel: tuple = ()             # what the Fresnel form reads beyond F0, at the point
+    t_i: Float | None = None        # base="plastic": the transmittance t(cos θ_i)
 
 
 class CookTorrance(BRDF):
@@ -214,6 +432,25 @@ class CookTorrance(BRDF):
                    "Beckmann G1 for beckmann (a rational fit of its erf form, within 5.5e-6), "
                    "and for blinn the Smith G1 of the Blinn "
                    "distribution itself, tabulated (:mod:`mi_brdfs.bsdfs.microfacet`)."),
+        Option("fresnel", "schlick", FRESNELS,
+               doc='F: ``"schlick"`` is the lecture\'s F0 + (1 - F0)(1 - ω_r·h)^5 with ``f0``; '
+                   '``"conductor"`` the exact reflectance of a conductor of complex index '
+                   '``eta`` + i ``kappa`` or of Mitsuba\'s ``material`` (read as '
+                   '``roughconductor`` reads them); ``"dielectric"`` the exact reflectance of '
+                   'the interface ``int_ior``/``ext_ior`` (read as ``roughplastic`` reads '
+                   'them); ``"f82"`` Hoffman\'s F82-tint (``f0``, ``f82_tint``): '
+                   ':mod:`mi_brdfs.bsdfs.fresnel`. A parameter of another form, if given, is '
+                   'checked and has no effect.'),
+        Option("base", "lambert", BASES,
+               doc='the diffuse lobe: ``"lambert"`` is the lecture\'s k-weighted Lambert; '
+                   '``"plastic"`` ``roughplastic``\'s substrate seen through the rough '
+                   'dielectric interface (needs ``fresnel="dielectric"``, ``geometry="smith"``, '
+                   '``beckmann`` or ``ggx``, an isotropic constant ``alpha``, ``mode="hdr"``; '
+                   '``k`` is not used: the interface\'s transmittance weighs the substrate).'),
+        Option("nonlinear", False,
+               doc='``base="plastic"``: the internal scattering darkens and saturates the '
+                   "substrate's colour, m_D/(1 - m_D R) instead of m_D/(1 - R), as "
+                   "``roughplastic``'s ``nonlinear``."),
         Option("sample_visible", True,
                doc="Beckmann and GGX: sample the visible normals (else the full distribution "
                    "D(m)·cos θ_m); Blinn always samples the latter."),
@@ -226,6 +463,28 @@ class CookTorrance(BRDF):
               doc="the weight of the diffuse lobe; the specular lobe gets 1 - k."),
         Param("f0", 0.04, 0.0, 1.0, kind="float", role="weight",
               doc="F_0 of Schlick's Fresnel approximation."),
+        Param("eta", 0.0, 0.0, None, role="shape", upper=3.0, optional=True,
+              doc='``fresnel="conductor"``: η, the real part of the conductor\'s index of '
+                  "refraction (a colour, or a spectrum), as ``roughconductor``'s ``eta``; "
+                  "default 0 with ``kappa`` 1, the perfect mirror (F = 1), as there. Or give "
+                  "``material``, a string naming Mitsuba's measured data (``Au``, ``Cu``, "
+                  "``Al``, ...: its ``data/ior``), not both."),
+        Param("kappa", 1.0, 0.0, None, role="shape", upper=5.0, optional=True,
+              doc='``fresnel="conductor"``: κ, the extinction coefficient, the imaginary '
+                  "part of the index (``roughconductor``'s ``k``, renamed: the lecture's "
+                  "``k`` is the diffuse weight)."),
+        Param("int_ior", 1.49, IOR_MIN, None, kind="float", role="shape", upper=3.0,
+              optional=True,
+              doc='``fresnel="dielectric"``: the interior index of refraction, a number or '
+                  "one of Mitsuba's names (``\"bk7\"``, ``\"water\"``, ...; default "
+                  "polypropylene, 1.49), as ``roughplastic``'s ``int_ior``."),
+        Param("ext_ior", 1.000277, IOR_MIN, None, kind="float", role="shape", upper=3.0,
+              optional=True,
+              doc='``fresnel="dielectric"``: the exterior index of refraction (default air, '
+                  "1.000277), likewise."),
+        Param("f82_tint", 1.0, 0.0, 1.0, role="weight", optional=True,
+              doc='``fresnel="f82"``: the reflectance at 82° as a fraction of Schlick\'s '
+                  "there (a colour; 1: Schlick's curve), Hoffman 2023."),
         Param("alpha", 0.3, 0.0, None, kind="scalar", role="shape", upper=1.0, discontinuous=True,
               doc="the lecture's roughness ρ (<= 1 for ``blinn``); values below "
                   "``ALPHA_MIN`` = 1e-4 (0, the perfectly smooth surface, included) are "
@@ -257,14 +516,110 @@ class CookTorrance(BRDF):
                 raise reader.error(name, props[name], 'distribution "beckmann" or "ggx" '
                                    "(Blinn's D is isotropic here: give alpha)")
         given = ("alpha_u", "alpha_v") if self.anisotropic else ("alpha",)
+        form = self.options.fresnel
+        if getattr(self.options, "energy_compensation", False) and form != "schlick":
+            raise reader.error("energy_compensation", True,
+                               f'false with fresnel="{form}" (its random-walk reference is '
+                               "tabulated for Schlick's F only)")
+        if self.options.base == "plastic":
+            self.check_plastic(reader)
+        if "material" in props:
+            self.read_material(reader)
+        for name in ("int_ior", "ext_ior"):
+            if name in props and props.type(name) == STRING:
+                props[name] = self.lookup_ior(reader, name)
         for p in self.PARAMS:
             if p.name.startswith("alpha") and p.name not in given:
+                continue
+            if p.optional and p.name not in props and p.name not in FRESNEL_PARAMS[form]:
+                continue                                     # not read by this Fresnel
+            if p.name in ("eta", "kappa") and "material" in props:
+                continue
+            if p.name == "k" and self.options.base == "plastic":
                 continue
             if p.name == "alpha" and self.options.distribution == "blinn":
                 p = replace(p, hi=1.0)                       # Blinn: 2/rho² - 2 >= 0
             self.read_param(reader, p)
         if self.options.distribution == "blinn" and self.options.geometry == "smith":
             self.m_g1_blinn = mf.g1_blinn_grid().data        # traversed: frozen functions
+        if self.options.base == "plastic":
+            if self.m_alpha.is_spatially_varying():
+                raise reader.error("alpha", self.m_alpha, 'a constant with base="plastic" (the '
+                                   "transmittance is tabulated for one roughness, as "
+                                   "roughplastic's)")
+            self.update_plastic()
+
+    def check_plastic(self, reader: Reader) -> None:
+        """base="plastic": what roughplastic's base is made of, or one line saying why not."""
+        props, o = reader.props, self.options
+        if "k" in props:
+            raise reader.error("k", props["k"], 'not given with base="plastic" (the substrate '
+                               "is weighed by the interface's transmittance, not by k)")
+        needs = (("fresnel", o.fresnel, "dielectric", "the substrate is seen through the "
+                  "dielectric interface"),
+                 ("geometry", o.geometry, "smith", "the interface's transmittance is that of "
+                  "Smith's microsurface, as roughplastic's"),
+                 ("mode", o.mode, "hdr", "roughplastic's base is radiometric"))
+        for name, value, wanted, why in needs:
+            if value != wanted:
+                raise reader.error(name, value, f'"{wanted}" with base="plastic" ({why})')
+        if o.distribution == "blinn":
+            raise reader.error("distribution", "blinn", '"beckmann" or "ggx" with '
+                               'base="plastic" (as roughplastic)')
+        if self.anisotropic:
+            name = "alpha_u" if "alpha_u" in props else "alpha_v"
+            raise reader.error(name, props[name], 'alpha with base="plastic" (isotropic, as '
+                               "roughplastic)")
+
+    def update_plastic(self) -> None:
+        """The transmittance table and internal reflectance of the interface at
+        the current roughness and index (:func:`plastic_tables`)."""
+        alpha = min(max(value_range(self.m_alpha)[0], mf.ALPHA_MIN), mf.ALPHA_MAX)
+        eta = plain(self.m_int_ior) / plain(self.m_ext_ior)
+        t, r = plastic_tables(self.options.distribution, float(np.float32(alpha)), eta)
+        self.state.plastic = Grid((PLASTIC_MU,), t)
+        self.m_plastic_t = self.state.plastic.data          # traversed: frozen functions
+        self.m_plastic_r = number(r)
+        self.m_inv_eta2 = number(1.0 / (eta * eta))
+
+    def parameters_changed(self, keys=[]):
+        super().parameters_changed(keys)
+        if self.options.base == "plastic":
+            self.update_plastic()
+
+    def read_material(self, reader: Reader) -> None:
+        """``material``: Mitsuba's measured (η, κ) of a conductor, as ``roughconductor``
+        reads it (``"none"``: its perfect mirror, η = 0, κ = 1)."""
+        props, name = reader.props, reader.props["material"]
+        valid = f"one of {', '.join(materials())} or \"none\" (Mitsuba's data/ior)"
+        if props.type("material") != STRING or \
+                (name != "none" and name not in materials()):
+            raise reader.error("material", name, valid)
+        if self.options.fresnel != "conductor":
+            raise reader.error("material", name, f'given with fresnel="conductor" only '
+                               f'(here "{self.options.fresnel}")')
+        for other in ("eta", "kappa"):
+            if other in props:
+                raise reader.error(other, props[other], "either material or eta/kappa, not both")
+        if name == "none":
+            eta, kappa = (create("uniform", {"value": v}) for v in (0.0, 1.0))
+        else:
+            eta, kappa = material_textures(name)
+        for p in self.PARAMS:
+            if p.name in ("eta", "kappa"):
+                setattr(self, "m_" + p.name, eta if p.name == "eta" else kappa)
+                self.state.params[p.name] = p
+
+    @staticmethod
+    def lookup_ior(reader: Reader, name: str) -> float:
+        """An index of refraction given by name, from Mitsuba's table (as
+        ``roughplastic`` reads ``int_ior`` and ``ext_ior``)."""
+        try:
+            return float(mi.lookup_ior(reader.props, name, 1.0))
+        except Exception as e:
+            reason = str(e).strip().splitlines()[-1].split("] ")[-1]
+            raise reader.error(name, reader.props[name],
+                               f"a number, or one of Mitsuba's names ({reason})") from None
 
     @classmethod
     def tables(cls) -> list:
@@ -289,21 +644,68 @@ class CookTorrance(BRDF):
         else:
             microfacet = Microfacet(o.distribution, roughness(self.m_alpha, si, active),
                                     visible=o.sample_visible)
+        reads = ()
+        if self.state.plan.lobes.specular:
+            reads = tuple(getattr(self, "m_" + name).eval(si, active)
+                          for name in FRESNEL_PARAMS[o.fresnel] if name not in ("int_ior", "ext_ior"))
+            if o.fresnel == "dielectric":
+                reads = (self.m_int_ior / self.m_ext_ior,)
+        t_i = None
+        if o.base == "plastic":
+            t_i = self.transmittance(mi.Frame3f.cos_theta(si.wi))
         return Inputs(self.colour("diffuse_reflectance", "diffuse", si, active),
                       self.colour("specular_reflectance", "specular", si, active),
-                      microfacet, self.m_f0)
+                      microfacet, self.m_f0, reads, t_i)
+
+    def transmittance(self, cos_theta):
+        """base="plastic": t(cos θ), the light the rough interface lets through."""
+        return self.state.plastic(dr.fmin(dr.fmax(cos_theta, 0.0), 1.0), data=self.m_plastic_t)
+
+    def fresnel(self, inp, c):
+        """F at c = ω_r·h by the chosen form: a Float (``schlick``, ``dielectric``)
+        or a colour (``conductor``, ``f82``), see :meth:`coloured`."""
+        form = self.options.fresnel
+        if form == "schlick":
+            return fresnel.schlick(self.switch("f0"), c)
+        if form == "dielectric":
+            return fresnel.dielectric(inp.fresnel[0], c)
+        if form == "conductor":
+            return fresnel.conductor(inp.fresnel[0], inp.fresnel[1], c)
+        return fresnel.f82(self.switch("f0"), inp.fresnel[0], c)
+
+    def coloured(self) -> bool:
+        """True if F is a colour: it multiplies m_S then, the lobe's shape stays a Float."""
+        return self.options.fresnel in ("conductor", "f82")
+
+    def specular_lobe(self, inp, si, wo, h, D):
+        """m_S D F G / (4 cos θ_i) as a colour times a shape, with its ratio to the pdf."""
+        F = self.fresnel(inp, dot(si.wi, h))
+        coloured = self.coloured()
+        value, ratio = _specular(si.wi, wo, h, D, inp.microfacet, 1.0 if coloured else F,
+                                 self.options.geometry)
+        return Scaled(inp.colour_s * F if coloured else inp.colour_s, value, ratio)
 
     def lobe_weights(self, inp):
+        if self.options.base == "plastic":
+            return 1.0, 1.0
         k = self.switch("k")
         return k, 1.0 - k
 
     def eval_diffuse(self, inp, si, wo):
-        return lambert.eval_diffuse(inp.colour_d, mi.Frame3f.cos_theta(wo), self.options.mode)
+        cos_o = mi.Frame3f.cos_theta(wo)
+        if self.options.base == "lambert":
+            return lambert.eval_diffuse(inp.colour_d, cos_o, self.options.mode)
+        # roughplastic's base: m_D/(1 - R) (or m_D/(1 - m_D R), m_D <= 1 in it), entering
+        # and leaving through the interface, t(θ_i) t(θ_o)/η², spread as Lambert's
+        m_d = inp.colour_d
+        inner = dr.fmin(m_d, 1.0) * self.m_plastic_r if self.options.nonlinear \
+            else self.m_plastic_r
+        ratio = inp.t_i * self.transmittance(cos_o) * self.m_inv_eta2
+        return Scaled(m_d / (1.0 - inner), ratio * (cos_o * (1.0 / math.pi)), ratio)
 
     def eval_specular(self, inp, si, wo):
-        value, ratio = eval_specular(si.wi, wo, inp.microfacet, self.switch("f0"),
-                                     self.options.geometry)
-        return Scaled(inp.colour_s, value, ratio)
+        h = half_vector(si.wi, wo)
+        return self.specular_lobe(inp, si, wo, h, inp.microfacet.D(h))
 
     def sample_specular(self, inp, si, sample2):
         return sample_specular(si.wi, sample2, inp.microfacet)
@@ -312,18 +714,28 @@ class CookTorrance(BRDF):
         return pdf_specular(si.wi, wo, inp.microfacet)
 
     def eval_pdf_specular(self, inp, si, wo):
-        value, ratio, pdf = eval_pdf_specular(si.wi, wo, inp.microfacet, self.switch("f0"),
-                                              self.options.geometry)
-        return Scaled(inp.colour_s, value, ratio), pdf
+        # the half vector and D shared (see the module's eval_pdf_specular)
+        h = half_vector(si.wi, wo)
+        D = inp.microfacet.D(h)
+        return self.specular_lobe(inp, si, wo, h, D), \
+            inp.microfacet.reflection_pdf(si.wi, wo, h, D)
 
     def selection_weights(self, inp, si):
         w_d = w_s = mi.Float(0.0)
         lobes = self.state.plan.lobes
+        if self.options.base == "plastic":
+            # roughplastic's: the substrate in proportion to t(θ_i)·mean(m_D), the
+            # interface to (1 - t(θ_i))·mean(m_S), each mean over the sum of both
+            m_d, m_s = mean(inp.colour_d), mean(inp.colour_s)
+            total = m_d + m_s
+            s_w = dr.select(total > 0.0, m_s / dr.select(total > 0.0, total, 1.0), 0.5)
+            return inp.t_i * (1.0 - s_w), (1.0 - inp.t_i) * s_w
         if lobes.diffuse:
             w_d = self.m_k * lambert.albedo(mean(inp.colour_d), self.options.mode)
         if lobes.specular:
-            F = fresnel.schlick(self.m_f0, mi.Frame3f.cos_theta(si.wi))
-            w_s = (1.0 - self.m_k) * mean(inp.colour_s) * F
+            F = self.fresnel(inp, mi.Frame3f.cos_theta(si.wi))
+            w_s = (1.0 - self.m_k) * (mean(inp.colour_s * F) if self.coloured()
+                                      else mean(inp.colour_s) * F)
         return w_d, w_s
 
     @classmethod
@@ -493,6 +905,72 @@ class CookTorrance(BRDF):
                       "k": 0.0, "energy_compensation": True}
                      for d in ("beckmann", "ggx") for g in mf.GEOMETRIES
                      for au, av in ((0.0, 1.0), (1e4, 1e-4), (1e3, 1e3))]
+        # The Fresnel forms (F a colour for the conductor and F82: it weighs the lobe's
+        # selection too), each with a diffuse lobe beside and alone.
+        forms = [{"fresnel": "conductor", "material": "Au"},
+                 {"fresnel": "conductor", "eta": rgb([0.2, 0.5, 1.4]),
+                  "kappa": rgb([3.0, 2.4, 1.8])},
+                 {"fresnel": "dielectric", "int_ior": 1.5, "ext_ior": 1.0},
+                 {"fresnel": "f82", "f0": 0.9, "f82_tint": rgb([0.9, 0.6, 0.3])}]
+        chi2 += [Chi2({**c, **f, "distribution": "ggx", "geometry": "smith", "alpha": 0.3,
+                       "k": 0.3}, (0, 60, 85)) for f in forms[::2]]
+        chi2 += [Chi2({**c, **forms[3], "distribution": "beckmann", "alpha": 0.2, "k": 0.5},
+                      (45,))]
+        consistency += [{**c, **f, "distribution": d, "geometry": "smith", "alpha": 0.3, "k": k}
+                        for f in forms for d, k in (("ggx", 0.0), ("beckmann", 0.4))]
+        consistency += [{**c, **forms[0], "distribution": "ggx", "alpha_u": 0.05,
+                         "alpha_v": 0.4, "k": 0.0, "geometry": "smith"}]
+        # (the default conductor, η 0 and κ 1, is the perfect mirror: F = 1)
+        furnace += [Furnace(f"{label}, {d}, smith, α = {a}, k = 0", {
+                        **c, **f, "distribution": d, "geometry": "smith", "alpha": a, "k": 0.0,
+                        "specular_reflectance": 1.0})
+                    for label, f in (("conductor Au", forms[0]),
+                                     ("conductor η 0, κ 1", {"fresnel": "conductor"}),
+                                     ("dielectric 1.5", forms[2]),
+                                     ("F82 f0 0.9", {**forms[3], "f82_tint": 0.3}),
+                                     ("F82 f0 1, tint 1", {"fresnel": "f82", "f0": 1.0}))
+                    for d, a in (("ggx", 0.1), ("beckmann", 0.6))]
+        extremes += [{**c, **f, "alpha": a, "k": k, "distribution": "ggx", "geometry": g}
+                     for f in ({"fresnel": "conductor", "eta": 0.0, "kappa": 0.0},
+                               {"fresnel": "conductor", "eta": 1.0, "kappa": 0.0},
+                               {"fresnel": "conductor", "eta": 1e3, "kappa": 1e3},
+                               {"fresnel": "conductor", "material": "Au"},
+                               {"fresnel": "dielectric", "int_ior": 1e-3, "ext_ior": 1.0},
+                               {"fresnel": "dielectric", "int_ior": 1e3, "ext_ior": 1.0},
+                               {"fresnel": "dielectric", "int_ior": 1.0, "ext_ior": 1.0},
+                               {"fresnel": "f82", "f0": 0.0, "f82_tint": 0.0},
+                               {"fresnel": "f82", "f0": 1.0, "f82_tint": 0.0})
+                     for a in (1e-4, 1.0) for k in (0.0, 0.5) for g in mf.GEOMETRIES]
+        # roughplastic's base (its table of the interface's transmittance is not
+        # differentiated: no gradient cases, as roughplastic's)
+        plastic = {**c, "base": "plastic", "fresnel": "dielectric", "geometry": "smith"}
+        chi2 += [Chi2({**plastic, "distribution": d, "alpha": a, "mode": "hdr"}, (0, 60, 85))
+                 for d, a in (("ggx", 0.1), ("beckmann", 0.4))]
+        # (at the settings of Mitsuba 3.9.1's own roughplastic χ² tests: Beckmann,
+        # α 0.05 (ires 16) and 0.25, m_S 0.7, m_D 0.1, res 201)
+        chi2 += [Chi2({**plastic, "distribution": "beckmann", "alpha": a, "mode": "hdr",
+                       "specular_reflectance": 0.7, "diffuse_reflectance": 0.1}, (0, 45, 85))
+                 for a in (0.05, 0.25)]
+        consistency += [{**plastic, "distribution": d, "alpha": a, "mode": "hdr", **more}
+                        for d, a, more in (("ggx", 0.1, {}), ("beckmann", 0.3, {"nonlinear": True}),
+                                           ("ggx", 0.5, {"diffuse_reflectance": rgb([0.8, 0.2, 0.1]),
+                                                         "specular_reflectance": 0.5,
+                                                         "int_ior": "bk7"}))]
+        furnace += [Furnace(f"plastic base, {d}, α = {a}, η = {eta}, m_D = m_S = 1",
+                            {**plastic, "distribution": d, "alpha": a, "int_ior": eta,
+                             "ext_ior": 1.0, "diffuse_reflectance": 1.0,
+                             "specular_reflectance": 1.0, "mode": "hdr"}, hi=1.0 + 2e-3)
+                    for d, a, eta in (("ggx", 0.1, 1.5), ("ggx", 0.6, 1.33), ("beckmann", 0.3, 2.0))]
+        extremes += [{**plastic, "distribution": "ggx", "alpha": a, "mode": "hdr", **more}
+                     for a in (1e-4, 1.0, 1e3)
+                     for more in ({}, {"nonlinear": True, "diffuse_reflectance": 1.0},
+                                  {"int_ior": 1e-3, "ext_ior": 1.0}, {"int_ior": 1e3},
+                                  {"diffuse_reflectance": 0.0}, {"specular_reflectance": 0.0})]
+        interior = [{**c, "distribution": "ggx", "geometry": "smith", "alpha": 0.4, "k": 0.4,
+                     "diffuse_reflectance": 0.5, "specular_reflectance": 0.7, **f}
+                    for f in ({"fresnel": "conductor", "eta": 1.3, "kappa": 2.0},
+                              {"fresnel": "dielectric", "int_ior": 1.5, "ext_ior": 1.1},
+                              {"fresnel": "f82", "f0": 0.8, "f82_tint": 0.6})]
         return Cases(
             chi2=chi2, consistency=consistency, furnace=furnace, extremes=extremes,
             interior=[{**c, "distribution": d, "geometry": "smith", "alpha": 0.4, "k": 0.4,
@@ -504,7 +982,8 @@ class CookTorrance(BRDF):
             + [{**c, "distribution": d, "geometry": "smith", "alpha_u": 0.2, "alpha_v": 0.5,
                 "k": 0.4, "f0": 0.3, "diffuse_reflectance": 0.5, "specular_reflectance": 0.7,
                 **on} for d, on in (("beckmann", {}), ("ggx", {}),
-                                    ("ggx", {"energy_compensation": True}))],
+                                    ("ggx", {"energy_compensation": True}))]
+            + interior,
             negative=({**c, "distribution": "ggx", "k": 0.0, "alpha": 0.1},
                       {**c, "distribution": "ggx", "k": 0.0, "alpha": 0.105}, 45),
             lobe_width=0.35,
@@ -516,7 +995,11 @@ class CookTorrance(BRDF):
             + [{**a, "k": 0.2} for a in anisotropic]
             + [{**white, "distribution": d, "alpha_u": 0.15, "alpha_v": 0.6,
                 "specular_reflectance": rgb([0.95, 0.64, 0.54]), "f0": 0.4}
-               for d in ("beckmann", "ggx")],
+               for d in ("beckmann", "ggx")]
+            + [{**c, **f, "distribution": "ggx", "geometry": "smith", "alpha": 0.3, "k": 0.2}
+               for f in forms]
+            + [{**plastic, "distribution": "ggx", "alpha": 0.3, "mode": "hdr",
+                "diffuse_reflectance": rgb([0.8, 0.2, 0.1])}],
             lobe={**c, "distribution": "ggx", "alpha": 0.3, "k": 0.3, "f0": 0.5,
                   "diffuse_reflectance": 0.8},
             costs=[(f"cook_torrance {d} {g}", {**c, "distribution": d, "geometry": g, "alpha": 0.3})

@@ -1,12 +1,42 @@
-"""Fresnel reflectance: how much of the light a microfacet reflects at the
+r"""Fresnel reflectance: how much of the light a microfacet reflects at the
 cosine c = ω·m between a direction and the facet's normal.
 
 ``schlick``: the lecture's F = F0 + (1 - F0)(1 - clamp(c))^5 (Schlick 1994),
 F0 the reflectance at normal incidence (a number or a colour).
+
+``conductor``: the exact unpolarised reflectance of a conductor whose index
+of refraction relative to the outside is complex, η + iκ (per colour channel,
+or per wavelength in spectral variants), as Mitsuba's ``roughconductor``
+takes it. With a² + b² = √((η² - κ² - s²)² + 4η²κ²), a = √((a² + b² + η² - κ²
+- s²)/2) and s² = 1 - c² (Born & Wolf, *Principles of Optics*, §14.2):
+
+.. math::
+
+    R_s = \frac{a^2 + b^2 - 2ac + c^2}{a^2 + b^2 + 2ac + c^2},\quad
+    R_p = R_s\,\frac{(a^2 + b^2)c^2 - 2acs^2 + s^4}{(a^2 + b^2)c^2 + 2acs^2 + s^4},\quad
+    F = \tfrac12 (R_s + R_p).
+
+``dielectric``: the exact unpolarised reflectance of a dielectric interface
+of relative index η = η_int/η_ext (the light arriving from outside; total
+internal reflection where η < 1 and s² > η²): with c_t = √(1 - s²/η²),
+r_s = (c - η c_t)/(c + η c_t), r_p = (η c - c_t)/(η c + c_t), F = (r_s² + r_p²)/2.
+
+``f82``: Hoffman's F82-tint model (N. Hoffman, *Generalization of Adobe's
+Fresnel Model*, 2023; the metal of OpenPBR and of Adobe's Standard Material):
+Schlick's curve less a term that dips at c̄ = 1/7 (θ ≈ 82°), where the
+reflectance becomes ``f82_tint`` times Schlick's:
+
+.. math::
+
+    F = F_S(c) - \frac{F_S(\bar c)\,(1 - t)}{\bar c\,(1 - \bar c)^6}\;c\,(1 - c)^6,
+    \qquad F_S(c) = F_0 + (1 - F_0)(1 - c)^5.
 """
 from __future__ import annotations
 
 import drjit as dr
+
+F82_COS = 1.0 / 7.0                 # c̄: cos 81.8°, where F82-tint sets the dip
+TINY = 1e-30                        # keeps the dielectric's quotients finite at their limits
 
 
 def schlick(f0, c):
@@ -17,3 +47,51 @@ def schlick(f0, c):
     m = 1.0 - dr.fmin(dr.fmax(c, 0.0), 1.0)
     m2 = m * m
     return f0 + (1.0 - f0) * (m2 * m2 * m)
+
+
+def conductor(eta, kappa, c):
+    """The exact reflectance of a conductor of complex index η + iκ at cos c
+    (clamped to [0, 1]; η, κ colours or Floats). 1 for the perfect conductor
+    η = 0, κ = 1 (``roughconductor``'s default), 0 for η = 1, κ = 0 (no interface)."""
+    c = dr.fmin(dr.fmax(c, 0.0), 1.0)
+    c2 = c * c
+    s2 = 1.0 - c2
+    eta2, kappa2 = eta * eta, kappa * kappa
+    t = (eta2 - kappa2 - 1.0) + c2      # η² - κ² - s², exact where c² << 1 and η ~ 1
+    # a² + b² >= |t| (also where t² underflows); safe_sqrt: a zero derivative at 0
+    ab = dr.fmax(dr.safe_sqrt(t * t + 4.0 * eta2 * kappa2), dr.abs(t))
+    a = dr.safe_sqrt(0.5 * (ab + t))
+    two_ac = 2.0 * a * c
+    # (each quotient 1 where its denominator is 0: at grazing for η = 1, κ = 0, and
+    # at the normal for η = κ = 0; the other operand of the select never divides by 0,
+    # so that no derivative is inf times 0)
+    den = ab + c2 + two_ac
+    r_s = dr.select(den > 0.0, (ab + c2 - two_ac) / dr.select(den > 0.0, den, 1.0), 1.0)
+    u, v = ab * c2 + s2 * s2, two_ac * s2
+    r_p = r_s * dr.select(u + v > 0.0, (u - v) / dr.select(u + v > 0.0, u + v, 1.0), 1.0)
+    # (>= 0: where the index is that of the outside, η = 1 and κ = 0, the
+    # differences above cancel to a few ulps either side of 0)
+    return dr.fmax(0.5 * (r_s + r_p), 0.0)
+
+
+def dielectric(eta, c):
+    """The exact reflectance of a dielectric interface of relative index η
+    (> 0) for light arriving from outside at cos c (clamped to [0, 1]): 1
+    beyond the critical angle (η < 1)."""
+    c = dr.fmin(dr.fmax(c, 0.0), 1.0)
+    s2_t = (1.0 - c * c) / (eta * eta)                  # sin² of the refracted ray
+    c_t = dr.sqrt(dr.fmax(1.0 - s2_t, 0.0))
+    r_s = (c - eta * c_t) / dr.fmax(c + eta * c_t, TINY)
+    r_p = (eta * c - c_t) / dr.fmax(eta * c + c_t, TINY)
+    return dr.select(s2_t < 1.0, 0.5 * (r_s * r_s + r_p * r_p), 1.0)
+
+
+def f82(f0, tint, c):
+    """Hoffman's F82-tint: Schlick's F0 with the reflectance at c̄ = 1/7 set to
+    ``tint`` times Schlick's there (``tint`` 1: Schlick's curve); kept >= 0."""
+    m = 1.0 - F82_COS
+    a = schlick(f0, F82_COS) * (1.0 - tint) / (F82_COS * m ** 6)
+    c = dr.fmin(dr.fmax(c, 0.0), 1.0)
+    m = 1.0 - c
+    m2 = m * m
+    return dr.fmax(schlick(f0, c) - a * (c * m2 * m2 * m2), 0.0)

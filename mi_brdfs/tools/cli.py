@@ -91,6 +91,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
 
 def cmd_validate(args: argparse.Namespace) -> int:
     from . import validate          # here: it needs the reports extra (SciPy)
+    from .validate.page import plural
 
     set_threads(args.threads)
     set_verbosity(args.verbose)
@@ -102,7 +103,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
             print(f"FAIL {check['id']}: {check['measured']}")
     print(f"report: {os.path.join(args.output, 'index.html')} ({results['seconds']:.0f} s); "
           f"{s['pass']} checks pass, {s['documented']} documented behaviour, "
-          f"{s['known']} documented known limitations, {s['fail']} fail")
+          f"{plural(s['known'], 'documented known limitation')}, {s['fail']} fail")
     return 1 if s["fail"] else 0
 
 

@@ -62,7 +62,7 @@ scatters in the substrate, is reflected back down by the interface's inside
 
     f_\text{base}\cos\theta_o = \frac{m_D}{1 - R}\,
         \frac{t(\theta_i)\,t(\theta_o)}{\pi\,\eta^2}\cos\theta_o,
-    \qquad \frac{m_D}{1 - m_D R}\ \text{with}\ ``nonlinear``,
+    \qquad \frac{m_D}{1 - m_D R}\ \text{with nonlinear},
 
 t(θ) the light the rough interface transmits (Smith-masked, its
 dielectric F), tabulated at load time over 64 values of cos θ by our own
@@ -72,7 +72,7 @@ quadrature of its visible normals (:func:`plastic_tables`; within 4e-4 of
 ``k`` is not used (a given ``k`` is refused), and a sample picks the substrate
 with the probability ``roughplastic`` gives it, t(θ_i) mean(m_D) against
 (1 - t(θ_i)) mean(m_S). Eval equals ``roughplastic``'s within 1e-3 for GGX,
-the pdf within 6e-3. It needs ``geometry="smith"``,
+the pdf within 0.006. It needs ``geometry="smith"``,
 ``beckmann`` or ``ggx``, one constant isotropic ``alpha`` and ``mode="hdr"``,
 as ``roughplastic``; the table is not differentiated (as there).
 
@@ -1061,6 +1061,7 @@ class CookTorrance(BRDF):
                           {"distribution": "ggx", "geometry": "smith", "alpha_u": 0.1,
                            "alpha_v": 0.1})],
             mitsuba=("roughconductor", "roughplastic", "principled"),
-            checked="`roughconductor` (isotropic and anisotropic); `roughplastic` (× exact/Schlick "
-                    "Fresnel); the random walk on the microsurface",
+            checked="`roughconductor` (isotropic and anisotropic; the exact conductor Fresnel); "
+                    "`roughplastic` (the dielectric Fresnel and the plastic base); the random "
+                    "walk on the microsurface",
         )

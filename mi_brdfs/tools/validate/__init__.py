@@ -13,11 +13,12 @@ adds the three and one line in :func:`validate`):
    the pixels (as Mitsuba's own render tests judge a render against its
    reference's variance), not by a fixed threshold. Beside the renders,
    **exact Fresnel** (:func:`fresnel_section`): at BSDF level ``cook_torrance``
-   (Smith G, no diffuse) times the ratio of the exact dielectric Fresnel term
-   (an independent NumPy transcription) to Schlick's equals ``roughplastic``
-   (diffuse 0) to float precision, over many directions: the render
-   difference against ``roughplastic`` is then the measured effect of
-   Schlick's approximation, and nothing else.
+   (Smith G, no diffuse) with ``fresnel="dielectric"`` equals ``roughplastic``
+   (diffuse 0) to float precision, over many directions, and with the
+   lecture's Schlick F differs by what Schlick's approximation changes: the
+   render difference of the Schlick form against ``roughplastic`` is then
+   that approximation's effect, and nothing else; with ``base="plastic"`` the
+   whole BSDF equals ``roughplastic`` (a render check above).
 2. **White furnace** — each model, both modes, white colours: the directional
    albedo E(theta_i) = integral of eval(wi, wo) dwo, by stratified quadrature
    (independent of the plugin's sampling) and by rendering the BSDF alone (a

@@ -94,21 +94,22 @@ def equivalence_html(results: dict) -> str:
             + _figures(r["files"]))
     if results.get("fresnel"):
         parts.append(
-            "<h3>Exact Fresnel: cook_torrance is roughplastic up to Schlick's F</h3>"
+            "<h3>Exact Fresnel: cook_torrance's lobe is roughplastic's</h3>"
             f"<p>At {results['fresnel'][0]['pairs']:,} random direction pairs (wi, wo) on the "
-            "upper hemisphere: eval of <code>cook_torrance</code> (k = 0, Smith G, GGX) "
-            "times F_dielectric(wi·h) / F_Schlick(wi·h), the exact dielectric Fresnel "
-            "term transcribed in NumPy, against eval of <code>roughplastic</code> "
-            "(diffuse_reflectance 0, the same η). Largest difference relative to the "
-            "largest value:</p><table><tr><th>α</th><th>with the exact F</th>"
+            "upper hemisphere: eval of <code>cook_torrance</code> (k = 0, Smith G, GGX) with "
+            "<code>fresnel=\"dielectric\"</code>, and with the lecture's Schlick F, against eval "
+            "of <code>roughplastic</code> (diffuse_reflectance 0, the same η). Largest "
+            "difference relative to the largest value, and the range of "
+            "F_dielectric / F_Schlick (transcribed in NumPy) over the pairs:</p>"
+            "<table><tr><th>α</th><th>fresnel=\"dielectric\"</th>"
             "<th>with Schlick's F</th><th>F ratio range</th></tr>")
         for r in results["fresnel"]:
             cls = status[f"equivalence/{r['id']}"]
-            parts.append(f"<tr><td>{r['alpha']:g}</td><td class='{cls}'>{r['corrected']:.2g}</td>"
+            parts.append(f"<tr><td>{r['alpha']:g}</td><td class='{cls}'>{r['exact']:.2g}</td>"
                          f"<td>{r['schlick']:.3g}</td><td>{r['ratio_range'][0]:.3f} – "
                          f"{r['ratio_range'][1]:.3f}</td></tr>")
-        parts.append("</table><p>So the render difference against roughplastic above is "
-                     "the measured effect of Schlick's approximation.</p>")
+        parts.append("</table><p>So the render difference of the Schlick form against "
+                     "roughplastic above is the measured effect of Schlick's approximation.</p>")
     return "".join(parts)
 
 

@@ -233,6 +233,7 @@ def validation_page() -> str:
 
 
 def fit_page() -> str:
+    from mi_brdfs.tools.fit import trade          # the caption comes from the cells' writer
     records = fits()
     failed = sum("error" in r for r in records)
     lines = ["# Fit report: which model for which material", "",
@@ -243,9 +244,7 @@ def fit_page() -> str:
              "<a class=\"report-link\" href=\"../reports/trade/index.html\">The full "
              "report</a> (per material: the Pareto plot of error against cost, the BRDF "
              "slices, every fit's render, parameters and XML).", "",
-             "Each cell: the model's BRDF error and, after the dot, the FLIP of its image; "
-             "the lowest BRDF error per material in bold; cost × is the median render time "
-             "over the material's own.", "",
+             trade.CAPTION, "",
              "```{trade-table}", "```", ""]
     return "\n".join(lines)
 

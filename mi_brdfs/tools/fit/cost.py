@@ -154,7 +154,8 @@ def compare(target_worker: Worker, model_worker: Worker, rounds: tuple[int, int]
         mean, low, high = interval(ratios)
         if len(ratios) >= rounds[0] and high / low <= 1.0 + tolerance:
             break
-    return {"cost_ratio": mean, "cost_low": low, "cost_high": high, "cost_rounds": len(ratios)}
+    return {"cost_ratio": mean, "cost_low": low, "cost_high": high, "cost_rounds": len(ratios),
+            "cost_closed": high / low <= 1.0 + tolerance}
 
 
 def measure_costs(target, records: list[dict], settings, show=None) -> None:
@@ -181,6 +182,7 @@ def measure_costs(target, records: list[dict], settings, show=None) -> None:
             except CostError as error:
                 r["cost_error"] = str(error)
             r["cost_load"] = load
+            r["cost_cores"] = os.cpu_count()
             if show:
                 show(r)
 

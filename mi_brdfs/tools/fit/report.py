@@ -218,8 +218,8 @@ def _section(out: str, name: str, rows: list[dict], found: dict | None) -> str:
                      "close fit can read below it. It is the tolerance: a cheaper model looks "
                      "the same when its FLIP is within it of the best. ")
     if ok:
-        parts.append("★: first-ranked; ◇: on the Pareto front (same cost class: within a "
-                     f"factor {1 + rank.COST_BAND:g}).</p>")
+        parts.append("★: first-ranked; ◇: on the Pareto front (costs compare in classes a "
+                     f"factor {1 + rank.COST_BAND:g} wide).</p>")
     if any(r.get("renders") for r in ok):
         cells = [f'<figure><img src="{name}.jpg"><figcaption>target</figcaption></figure>']
         cells += [f'<figure><img src="{r["renders"]}"><figcaption>{r["rank"]}. '

@@ -14,7 +14,7 @@ import shutil
 
 import pytest
 
-from mi_brdfs.tools.fit import rank
+from mi_brdfs.tools.fit import rank, task
 
 
 def fit(model, flip, c=None, lo=None, hi=None, **extra):
@@ -48,6 +48,8 @@ def test_cost_classes_are_a_total_order_with_a_5_percent_band():
             assert rank.cheaper(a, c)
         assert sum([rank.cheaper(a, b), rank.cheaper(b, a), rank.equal_cost(a, b)]) == 1
     assert math.isinf(rank.cost_class(fit("x", 0.1)))
+    assert rank.COST_BAND == task.FULL.cost_tolerance == task.QUICK.cost_tolerance   # the aim
+    assert rank.CLOSED == pytest.approx(1 + task.FULL.cost_tolerance)
 
 
 def test_the_first_ranked_fit_is_on_the_front_and_the_alternative_too():

@@ -35,8 +35,9 @@ dominated it would be within the tie too, and before it by :func:`key`.
 **Looks the same** (:func:`tolerance`): a fit whose image error is within the
 tolerance of the best fit's looks like it. The tolerance is the target's seed
 noise — the FLIP between two renders of the target itself at different
-seeds (``image_noise_flip``, a few hundredths of FLIP's range): a model no further from the best than that differs from it by
-less than rendering the target again does. Without renders, :data:`LOOKS_SAME`.
+seeds (``image_noise_flip``, a few hundredths of FLIP's range): a model no
+further from the best than that differs from it by less than rendering the
+target again does. Without renders, :data:`LOOKS_SAME`.
 
 **The cheaper model that looks the same** (:func:`cheaper_alternative`): of
 the fits in a lower cost class than the first-ranked one that look the same
@@ -51,7 +52,7 @@ import re
 TIE_FLIP = 0.005           # FLIP differences below this count as equal in the ranking
 SMALL_FLIP = 0.05          # a best FLIP above this: no model is close; say why
 COST_BAND = 0.05           # the width of a cost class: a factor 1.05
-LOOKS_SAME = 0.02          # the tolerance when no seed noise was measured (no renders)
+LOOKS_SAME = 0.02          # the tolerance without renders (the sweep's seed noise: 0.014-0.030)
 CLOSED = 1.05              # an interval with high/low above this did not close (the timing's aim)
 
 
@@ -61,8 +62,8 @@ def ok(records: list[dict]) -> list[dict]:
 
 def quality(r: dict) -> float:
     """The error the ranking reads: FLIP, else the objective, else the BRDF error."""
-    for key in ("image_flip", "objective_error", "brdf_error"):
-        v = r.get(key)
+    for field in ("image_flip", "objective_error", "brdf_error"):
+        v = r.get(field)
         if v is not None and math.isfinite(v):
             return float(v)
     return math.inf

@@ -16,9 +16,10 @@
     (the colours that matter, :mod:`.effective`), ``albedo`` and
     ``target_albedo`` ([0°, 60°, 85°][R, G, B]), ``image_noise_flip`` and
     ``image_noise_relmse`` (the target against itself at another seed: the
-    seed noise, the tolerance of "looks the same", :mod:`.rank`), ``cost_rounds``,
-    ``cost_closed`` (the interval reached the tolerance), ``cost_load`` and
-    ``cost_cores`` (the machine's load average when it was timed, and its cores), ``ops``, ``reruns`` and ``worker`` (a task re-run
+    seed noise, the tolerance of "looks the same", :mod:`.rank`),
+    ``cost_rounds``, ``cost_closed`` (the interval reached the tolerance),
+    ``cost_load`` and ``cost_cores`` (the machine's load average when it was
+    timed, and its cores), ``ops``, ``reruns`` and ``worker`` (a task re-run
     after its Dask worker was lost), ``target_features``, ``xml``,
     ``renders``, ``start_errors``; a failed fit has ``error`` instead.
 ``fits.csv``
@@ -270,8 +271,8 @@ class (a factor {1 + rank.COST_BAND:g} wide, class 0 as costly as the target): t
 front, the ★ and the verdict use that one rule. The verdict's cheaper model is the cheapest
 whose FLIP is within the tolerance of the best: the target's seed noise (the target against
 itself at another seed; {rank.LOOKS_SAME} without renders); if none is, it says so.
-{html.escape(BRDF_ERROR, quote=False)}. Render cost: the model's time over the target's, each in a process
-of its own, until the 90 % interval is within {s.cost_tolerance:.0%} or after
+{html.escape(BRDF_ERROR, quote=False)}.
+Render cost: the model's time over the target's, each in a process of its own, until the 90 % interval is within {s.cost_tolerance:.0%} or after
 {s.cost_rounds[1]} rounds (at least {s.cost_rounds[0]}); the verdict says when an interval did
 not close, and the load it was timed at; ops: Dr.Jit operations of a traced eval and sample
 over the target's. See <code>docs/guide/fit.md</code>.</p>

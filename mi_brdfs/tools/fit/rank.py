@@ -43,6 +43,12 @@ target again does. Without renders, :data:`LOOKS_SAME`.
 the fits in a lower cost class than the first-ranked one that look the same
 as the best, the first by :func:`key` (the cheapest, then the best). On the
 front by the same argument as the first-ranked fit.
+
+**Verdict** (:func:`verdict`): the first-ranked fit, the cheaper model that
+looks the same with the tolerance, or "no cheaper model looks the same" and
+the closest cheaper fit; then what the cost figures can bear
+(:func:`cost_caveat`): the load average they were timed at, whether it
+exceeded the cores, and which named fit's interval did not close.
 """
 from __future__ import annotations
 

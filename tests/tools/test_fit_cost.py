@@ -59,6 +59,19 @@ def test_a_worker_that_fails_is_reported_not_raised():
     assert "reflectance" in records[0]["cost_error"]
 
 
+def test_the_pairwise_cost_calls_that_changed_are_counted_by_cost_class():
+    """cost.calls_changed over a remeasure's rows: classes round(log c / log
+    1.05) before and again (a: 0 → 0, b: 1 → 1, c: −2 → 0), so only a
+    against c changes (cheaper, then the same); a failed remeasure is left
+    out and another target's models are not paired with these."""
+    def row(target, model, before, again):
+        return {"target": target, "model": model, "before": (before, None, None),
+                "again": (again, None, None)}
+    rows = [row("t", "a", 1.00, 1.00), row("t", "b", 1.03, 1.07), row("t", "c", 0.90, 1.00),
+            row("t", "d", 0.50, None), row("u", "e", 5.0, 0.2), row("u", "f", 1.0, 1.0)]
+    assert cost.calls_changed(rows) == (1 + 1, 3 + 1)      # u: e costlier, then cheaper
+
+
 def fit(model, flip, c=None, lo=None, hi=None):
     return {"model": model, "image_flip": flip, "cost_ratio": c, "cost_low": lo, "cost_high": hi}
 

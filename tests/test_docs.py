@@ -261,6 +261,9 @@ def test_fit_table_is_the_committed_sweep(site):
         for r in records:                                 # each cell: FLIP · BRDF error
             row = next(row for row in rows if row.split()[0] == r["model"])
             assert f"{r['image_flip']:.2f} · {r['brdf_error']:.3f}" in row, (page, r["model"])
+    caption = " ".join(text_of(site, "results/fit.html").split())
+    assert "Each cell: the FLIP of the model" in caption, caption     # FLIP first, as the cells
+    assert "after the dot, its BRDF error" in caption and "bold: the first-ranked fit" in caption
     assert f"{len(records)} fits" in text_of(site, "guide/fit.html")
 
 
@@ -297,6 +300,17 @@ def test_fit_guide_figures_are_the_committed_sweep(site):
             assert first == "cook_torrance/ggx/smith", (spec, first)
     worse, better, pairs = trade.compensation_effect(records)
     assert worse > 10 * better and f"worse in {worse} of the {pairs}" in guide
+    for spec in dict.fromkeys(r["target"] for r in records):     # the cheaper model's bullet
+        order = rank.ranked([r for r in records if r["target"] == spec])
+        closest = rank.closest_cheaper(order)
+        if rank.cheaper_alternative(order) is not None:
+            assert spec.startswith("roughplastic:"), spec
+        elif spec.startswith("roughconductor:material=") and "distribution" not in spec:
+            assert closest["model"].startswith("cook_torrance/"), spec
+            assert rank.quality(closest) > rank.quality(order[0]) + 2 * rank.tolerance(order)
+        elif "ggx" in spec or "metallic=1" in spec:
+            assert closest["model"] == "lambert", spec
+    assert "no cheaper model looks the same" in guide
 
 
 def test_reports_are_pages_of_the_site_with_their_pictures(site):

@@ -132,6 +132,29 @@ def _trade_compensation_phrase() -> str:
             f"better in {better}")
 
 
+def _trade_noise_phrase() -> str:
+    """The seed noise's FLIP over the committed materials."""
+    noise = {r["target"]: r["image_noise_flip"] for r in fits() if r.get("image_noise_flip")}
+    return f"FLIP {_span(list(noise.values()), '.3f')}"
+
+
+def _trade_below_noise_phrase() -> str:
+    """On how many materials the first-ranked fit reads below the seed noise."""
+    first = _trade_first()
+    below = sum(r["image_flip"] < r["image_noise_flip"] for r in first)
+    return f"{below} of the {len(first)} materials"
+
+
+def _trade_cheaper_phrase() -> str:
+    """Which materials have a cheaper model that looks the same (:mod:`rank`)."""
+    from mi_brdfs.tools.fit import rank, trade
+    labels = {spec: label for label, spec in trade.TARGETS}
+    specs = list(dict.fromkeys(r["target"] for r in fits()))
+    named = [labels.get(s, s) for s in specs
+             if rank.cheaper_alternative(rank.ranked([r for r in fits() if r["target"] == s]))]
+    return f"{len(named)} of the {len(specs)} materials" + (f" ({', '.join(named)})" if named else "")
+
+
 def _fit_models() -> int:
     from mi_brdfs.tools.fit.models import all_models
     return len(all_models())
@@ -152,6 +175,9 @@ RESULTS = {
     "trade.models": lambda: str(_fit_models()),
     "trade.costs": _trade_cost_phrase,
     "trade.compensation": _trade_compensation_phrase,
+    "trade.noise": _trade_noise_phrase,
+    "trade.below_noise": _trade_below_noise_phrase,
+    "trade.cheaper": _trade_cheaper_phrase,
     "trade.own_cost": lambda: _span([r["cost_ratio"] for r in _trade_first(conductors=True)]),
     "trade.plastics": lambda: _span([r["image_flip"] for r in _trade_first(plugin="roughplastic")]),
     "trade.tie": lambda: f"{max(g for _, g, _ in _trade_checks() if g is not None):.3f}",
@@ -233,6 +259,7 @@ def validation_page() -> str:
 
 
 def fit_page() -> str:
+    from mi_brdfs.tools.fit import trade          # the caption comes from the cells' writer
     records = fits()
     failed = sum("error" in r for r in records)
     lines = ["# Fit report: which model for which material", "",
@@ -243,9 +270,7 @@ def fit_page() -> str:
              "<a class=\"report-link\" href=\"../reports/trade/index.html\">The full "
              "report</a> (per material: the Pareto plot of error against cost, the BRDF "
              "slices, every fit's render, parameters and XML).", "",
-             "Each cell: the model's BRDF error and, after the dot, the FLIP of its image; "
-             "the lowest BRDF error per material in bold; cost × is the median render time "
-             "over the material's own.", "",
+             trade.CAPTION, "",
              "```{trade-table}", "```", ""]
     return "\n".join(lines)
 

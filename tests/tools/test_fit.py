@@ -8,6 +8,7 @@ import csv
 import json
 import math
 import os
+import re
 import socket
 
 import numpy as np
@@ -240,6 +241,29 @@ def test_bad_input_gets_one_line(tmp_path, capsys, monkeypatch, args, message):
     assert code == 1 and len(err.splitlines()) == 1 and err.startswith("mi-brdfs fit: error: ")
     assert message in err
     assert not (tmp_path / "r").exists()
+
+
+@pytest.mark.parametrize("text, message", [
+    ('<shape type="sphere" version="3.0.0"><bsdf type="diffuse"/></shape>',
+     "its root is <shape>; valid: a <bsdf> root, or a <scene> with exactly one <bsdf> at its "
+     "top level"),
+    ('<scene version="3.0.0"><shape type="sphere"><bsdf type="diffuse"/></shape></scene>',
+     "its <scene> has 0 <bsdf> at its top level (a <bsdf> inside a <shape> is not counted)"),
+    ('<scene version="3.0.0"><bsdf type="diffuse"/><bsdf type="diffuse"/></scene>',
+     "its <scene> has 2 <bsdf> at its top level"),
+    ('<bsdf type="roughconductor" version="3.0.0"><float name="alphaa" value="0.2"/></bsdf>',
+     'unreferenced property in bsdf plugin of type "roughconductor"'),
+])
+def test_a_file_that_is_no_bsdf_is_refused_saying_what_was_expected(tmp_path, capsys, text,
+                                                                    message):
+    """The message says what the file holds and what would do, without a
+    count that reads as a contradiction, and without Mitsuba's source prefix."""
+    path = tmp_path / "target.xml"
+    path.write_text(text)
+    code = cli.main(["fit", str(path), "-o", str(tmp_path / "r")])
+    err = capsys.readouterr().err.strip()
+    assert code == 1 and len(err.splitlines()) == 1 and message in err
+    assert "found 1" not in err and not re.search(r"\[\w+\.cpp:\d+\]", err)
 
 
 def test_a_verdict_names_the_plugin_of_an_xml_target(tmp_path):

@@ -1,8 +1,8 @@
 """mi-brdfs fit's render cost and ranking (issue 26, points 2 and 3): the
 interval is Student's t on the log ratios, two measurements of the same
 models overlap (a loose bound: the bench shows the real spread), the counted
-operations do not move between runs, the Pareto front treats overlapping
-intervals as equal cost, and the ranking follows FLIP. No timing is asserted."""
+operations do not move between runs. (The ranking and the front:
+test_fit_rank.py.) No timing is asserted."""
 import math
 
 import numpy as np
@@ -59,44 +59,21 @@ def test_a_worker_that_fails_is_reported_not_raised():
     assert "reflectance" in records[0]["cost_error"]
 
 
+def test_the_pairwise_cost_calls_that_changed_are_counted_by_cost_class():
+    """cost.calls_changed over a remeasure's rows: classes round(log c / log
+    1.05) before and again (a: 0 → 0, b: 1 → 1, c: −2 → 0), so only a
+    against c changes (cheaper, then the same); a failed remeasure is left
+    out and another target's models are not paired with these."""
+    def row(target, model, before, again):
+        return {"target": target, "model": model, "before": (before, None, None),
+                "again": (again, None, None)}
+    rows = [row("t", "a", 1.00, 1.00), row("t", "b", 1.03, 1.07), row("t", "c", 0.90, 1.00),
+            row("t", "d", 0.50, None), row("u", "e", 5.0, 0.2), row("u", "f", 1.0, 1.0)]
+    assert cost.calls_changed(rows) == (1 + 1, 3 + 1)      # u: e costlier, then cheaper
+
+
 def fit(model, flip, c=None, lo=None, hi=None):
     return {"model": model, "image_flip": flip, "cost_ratio": c, "cost_low": lo, "cost_high": hi}
-
-
-def test_the_front_treats_overlapping_intervals_as_equal_cost():
-    rows = [fit("a", 0.10, 1.0, 0.95, 1.05),
-            fit("b", 0.20, 1.02, 0.97, 1.07),      # as costly as a (overlap), worse: off
-            fit("c", 0.30, 0.60, 0.55, 0.65),      # cheaper, worse: on
-            fit("d", 0.30, 0.80, 0.75, 0.85),      # costlier than c, no better: off
-            fit("e", 0.05, 2.00, 1.90, 2.10)]      # costlier, better: on
-    assert [r["model"] for r in rank.front(rows)] == ["a", "c", "e"]
-    assert rank.equal_cost(rows[0], rows[1]) and rank.cheaper(rows[2], rows[0])
-
-
-def test_the_ranking_follows_flip_and_prefers_the_cheaper_of_a_tie():
-    rows = [fit("x", 0.200, 1.0, 0.9, 1.05), fit("y", 0.102, 1.2, 1.1, 1.3),
-            fit("z", 0.100, 2.0, 1.9, 2.1), {"model": "failed", "error": "boom"}]
-    assert [r["model"] for r in rank.ranked(rows)] == ["y", "z", "x"]     # 0.102 ties 0.100
-    line = rank.verdict(rows, "roughconductor")
-    assert line == ("y: FLIP 0.102, 1.20× (1.10–1.30) the cost of roughconductor; "
-                    "x is 1.00× (0.90–1.05) the cost at FLIP 0.200")
-
-
-def test_the_readme_table_names_the_first_model_and_a_cheaper_one_beyond_the_noise():
-    """trade.summary, the README's table: per material the first-ranked model
-    and the best of those whose whole interval is below its (w overlaps y:
-    not cheaper; x and v are, v the better); a material every fit of which
-    failed says so."""
-    from mi_brdfs.tools.fit import trade
-    rows = [fit("x", 0.200, 1.0, 0.9, 1.05), fit("y", 0.102, 1.2, 1.1, 1.3),
-            fit("z", 0.100, 2.0, 1.9, 2.1), fit("w", 0.150, 1.12, 1.08, 1.15),
-            fit("v", 0.180, 0.5, 0.45, 0.55)]
-    rows = [{**r, "target": "t:a"} for r in rows] + [{"target": "t:b", "model": "u", "error": "boom"}]
-    lines = trade.summary(rows, {"t:a": "A"}).splitlines()
-    assert lines[2] == ("| A | `y` | 0.102 | 1.20× (1.10–1.30) | "
-                        "`v`: FLIP 0.180 at 0.50× (0.45–0.55) |")
-    assert lines[3] == "| t:b | every fit failed | – | – | – |"
-    assert len(lines) == 4
 
 
 def test_compensation_is_counted_per_pair_fitted_both_ways():

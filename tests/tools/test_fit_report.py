@@ -156,3 +156,37 @@ def test_a_partial_trade_sweep_says_what_it_left_out(capsys):
     err = capsys.readouterr().err
     assert exit_.value.code == 1 and len(err.splitlines()) == 1
     assert "--materials: unknown label 'Au α0.2'" in err
+
+
+def test_the_brdf_error_is_one_for_black_and_above_one_for_a_sharper_lobe():
+    """brdf_error is E(f)/E(0): exactly 1 for a black BSDF, and above 1 for
+    Mitsuba's own gold at half the roughness — a lobe sharper than the
+    target's, whose directional albedo is within 5 % of the target's: L²
+    weighs the taller peak by its height squared. The report's header says
+    so rather than that 1 is the worst."""
+    from mi_brdfs.tools.fit import report
+    s = TINY.replace(viewers=(8, 4), uniform=(8, 8), lobe=16)
+    p = metric.pairs(s.metric, s.viewers, s.uniform, s.lobe)
+    target = mi.load_dict({"type": "roughconductor", "material": "Au", "alpha": 0.1})
+    sharper = mi.load_dict({"type": "roughconductor", "material": "Au", "alpha": 0.05})
+    prob = optimise.problem(target, p)
+    values = optimise.values_of(sharper, prob.si, prob.wo)
+    assert optimise.relative(np.zeros_like(values), prob) == pytest.approx(1.0, abs=1e-12)
+    assert optimise.relative(values, prob) > 1.0
+    a_t, a_s = effective.albedo(target), effective.albedo(sharper)
+    assert np.allclose(a_s[0], a_t[0], rtol=0.05)
+    assert "black = 1" in report.HEAD and "not bounded by 1" in report.BRDF_ERROR
+
+
+def test_the_report_states_the_tolerance_the_seed_noise_and_a_plastics_reason(tmp_path):
+    """A plastic no model comes close to gets the reason the guide gives
+    (internal scattering under a coating), not "no feature"; the seed noise is
+    explained as no floor for the fits and named as the tolerance; the verdict
+    says whether a cheaper model looks the same."""
+    fit(["roughplastic:alpha=0.1,diffuse_reflectance=[0.6,0.2,0.1]"], str(tmp_path / "r"),
+        ["lambert"], settings=TINY)
+    page = (tmp_path / "r" / "index.html").read_text()
+    assert "No course model comes close" in page and "internal scattering" in page
+    assert "No feature the fit can name" not in page
+    assert "It is no floor for the fits" in page and "It is the tolerance" in page
+    assert "★: first-ranked" in page

@@ -17,8 +17,9 @@ running beside it would be measured with it.
 
 **Again** (``python -m mi_brdfs.tools.fit.cost REPORT_DIR [--targets N]``):
 the costs of a fit report's fits measured once more and printed beside the
-report's, with whether the two intervals overlap — the spread of the method
-on this machine. It writes nothing.
+report's, with whether the two intervals overlap, and how many pairwise
+comparisons by cost class (:mod:`.rank`) came out otherwise — the spread of
+the method on this machine. It writes nothing.
 
 **Counted** (``ops_ratio``): the Dr.Jit variables one traced ``eval`` and
 one traced ``sample`` create (the bench's count, from Dr.Jit's trace log:
@@ -40,7 +41,7 @@ import mitsuba as mi
 
 from ..analysis import bsdf_call, bsdf_inputs, variables_created
 from ..errors import one_line
-from . import models as M, scene as S, targets as T
+from . import models as M, rank, scene as S, targets as T
 from .task import FULL
 
 OPS_LANES = 1024           # lanes of the traced calls counted (the count does not depend on it)
@@ -154,7 +155,8 @@ def compare(target_worker: Worker, model_worker: Worker, rounds: tuple[int, int]
         mean, low, high = interval(ratios)
         if len(ratios) >= rounds[0] and high / low <= 1.0 + tolerance:
             break
-    return {"cost_ratio": mean, "cost_low": low, "cost_high": high, "cost_rounds": len(ratios)}
+    return {"cost_ratio": mean, "cost_low": low, "cost_high": high, "cost_rounds": len(ratios),
+            "cost_closed": high / low <= 1.0 + tolerance}
 
 
 def measure_costs(target, records: list[dict], settings, show=None) -> None:
@@ -181,6 +183,7 @@ def measure_costs(target, records: list[dict], settings, show=None) -> None:
             except CostError as error:
                 r["cost_error"] = str(error)
             r["cost_load"] = load
+            r["cost_cores"] = os.cpu_count()
             if show:
                 show(r)
 
@@ -229,6 +232,25 @@ def remeasure(report_dir: str, max_targets: int | None = None, settings=None, sh
     return rows
 
 
+def calls_changed(rows: list[dict]) -> tuple[int, int]:
+    """Of the pairs of models of one target measured both times (rows of
+    :func:`remeasure`), in how many the cost comparison of :mod:`.rank`
+    (cheaper, the same or costlier, by cost class) came out otherwise the
+    second time; and of how many."""
+    changed = pairs = 0
+    for target in dict.fromkeys(r["target"] for r in rows):
+        mine = [r for r in rows if r["target"] == target and r["again"][0] is not None]
+        for i, a in enumerate(mine):
+            for b in mine[i + 1:]:
+                pairs += 1
+                calls = []
+                for when in ("before", "again"):
+                    ca, cb = ({"cost_ratio": r[when][0]} for r in (a, b))
+                    calls.append((rank.cheaper(ca, cb), rank.cheaper(cb, ca)))
+                changed += calls[0] != calls[1]
+    return changed, pairs
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="python -m mi_brdfs.tools.fit.cost",
                                 description="Measure a fit report's render costs again and "
@@ -250,8 +272,10 @@ def main(argv: list[str] | None = None) -> int:
               f"{r['rounds']} | {r['load']:.1f} | {'yes' if r['overlap'] else 'NO'} |")
     both = [r for r in rows if r["again"][0] is not None]
     widths = [r["again"][2] / r["again"][1] for r in both]
+    changed, pairs = calls_changed(rows)
     print(f"\n{sum(r['overlap'] for r in both)} of {len(both)} intervals overlap; "
-          f"high/low median {statistics.median(widths):.3f}, largest {max(widths):.3f}")
+          f"high/low median {statistics.median(widths):.3f}, largest {max(widths):.3f}; "
+          f"{changed} of {pairs} pairwise cost comparisons (by cost class) came out otherwise")
     return 0
 
 

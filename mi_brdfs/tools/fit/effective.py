@@ -173,6 +173,21 @@ def describe(found: dict) -> list[str]:
     return out
 
 
+KNOWN = {          # plugin: what it has that no course model has, as the fit guide explains it
+    "roughplastic": "it is a plastic: light refracted into its substrate scatters inside and "
+                    "leaves through the Fresnel-transmitting coating (internal scattering), so "
+                    "its diffuse layer is weighted by the coating's transmission at both "
+                    "directions; no course model has a coating over its diffuse layer",
+}
+KNOWN["plastic"] = KNOWN["roughplastic"]
+
+
+def known_reasons(plugin: str) -> list[str]:
+    """What a target of this Mitsuba plugin is known to have that no course
+    model has (empty if nothing is known)."""
+    return [KNOWN[plugin]] if plugin in KNOWN else []
+
+
 def extended_models(found: dict) -> list:
     """The course models' extended configurations worth fitting for the
     features found: for an anisotropic target, those the models declare

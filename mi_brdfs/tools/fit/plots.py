@@ -20,19 +20,24 @@ def _figure(width, height):
 
 
 def pareto_plot(path: str, title: str, rows: list[dict]) -> None:
-    """FLIP against cost, each cost with its interval; the front in red,
-    numbered, and its models listed beside the plot (labels never overlap)."""
+    """FLIP against cost, each cost with its interval; the front
+    (:func:`.rank.front`) in red, numbered from the cheapest and listed beside
+    the plot (labels never overlap); the first-ranked fit a star."""
     fig = _figure(8.4, 4.4)
     ax = fig.add_axes([0.08, 0.12, 0.55, 0.78])
     measured = [r for r in rows if r.get("cost_ratio") is not None]
-    on = rank.front(measured)
-    order = sorted(on, key=lambda r: r["cost_ratio"])
+    order = rank.front(measured)
+    first = rank.ranked(rows)[0] if rank.ranked(rows) else None
     for r in measured:
         c, q = r["cost_ratio"], max(rank.quality(r), 1e-4)
         lo, hi = r.get("cost_low") or c, r.get("cost_high") or c
-        colour = "C3" if r in on else "0.6"
-        ax.errorbar([c], [q], xerr=[[c - lo], [min(hi, 10 * c) - c]], fmt="o", ms=5 if r in on else 3,
-                    color=colour, ecolor=colour, elinewidth=1, capsize=2, zorder=3 if r in on else 2)
+        on = r in order
+        colour = "C3" if on else "0.6"
+        ax.errorbar([c], [q], xerr=[[c - lo], [min(hi, 10 * c) - c]], fmt="o", ms=5 if on else 3,
+                    color=colour, ecolor=colour, elinewidth=1, capsize=2, zorder=3 if on else 2)
+    if first is not None and first in measured:
+        ax.plot([first["cost_ratio"]], [max(rank.quality(first), 1e-4)], marker="*", ms=14,
+                color="C3", markeredgecolor="black", zorder=4, ls="none")
     for i, r in enumerate(order, 1):
         ax.annotate(str(i), (r["cost_ratio"], max(rank.quality(r), 1e-4)), fontsize=8,
                     xytext=(4, 4), textcoords="offset points", color="C3")
@@ -44,10 +49,10 @@ def pareto_plot(path: str, title: str, rows: list[dict]) -> None:
     ax.set_ylabel("image error (FLIP, mean of the views)")
     ax.set_title(title, fontsize=9)
     ax.grid(True, which="both", alpha=0.3)
-    lines = [f"{i}  {r['model']}\n    FLIP {rank.quality(r):.3f}, cost {r['cost_ratio']:.2f}×"
-             for i, r in enumerate(order, 1)]
-    fig.text(0.66, 0.9, "Pareto front\n(overlapping intervals:\nequal cost)\n\n" + "\n".join(lines),
-             fontsize=7, va="top", family="monospace")
+    lines = [f"{i}{' ★' if r is first else '  '} {r['model']}\n     FLIP {rank.quality(r):.3f}, "
+             f"cost {r['cost_ratio']:.2f}×" for i, r in enumerate(order, 1)]
+    fig.text(0.66, 0.9, f"Pareto front (equal cost: the same\n{rank.COST_BAND:.0%} cost class); "
+             "★ first-ranked\n\n" + "\n".join(lines), fontsize=7, va="top", family="monospace")
     fig.savefig(path)
 
 

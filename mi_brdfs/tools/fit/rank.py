@@ -1,27 +1,65 @@
 """The answer per target: models ranked by what the image shows, the Pareto
-front of image error against cost with the cost's interval, and a verdict
-line a user can read.
+front of image error against cost, and a verdict line a user can read — all
+from one comparison rule, written here once.
 
-**Ranking.** By ``image_flip``, the mean HDR-FLIP of the model's renders
-against the target's over the standard views (:mod:`.scene`); fits within
-``TIE_FLIP`` of the best FLIP count as equally good, and among those the
-cheaper comes first (by ``cost_ratio``). Without renders, by the objective,
-then the BRDF error.
+**Image error** (:func:`quality`): ``image_flip``, the mean HDR-FLIP of the
+model's renders against the target's over the standard views (:mod:`.scene`);
+without renders the objective, then the BRDF error. FLIP runs from 0
+(identical) to 1 (the largest difference it measures).
 
-**Cost** comparisons use the 90 % interval of each model's cost
-(:mod:`.cost`): two models whose intervals overlap are equal in cost.
+**Cost** (:func:`cost_class`): the render cost over the target's
+(``cost_ratio``, :mod:`.cost`), put on a total order in classes of
+:data:`COST_BAND`: class n holds the costs within a factor 1.05^(n ± ½) of the
+target's own, so class 0 is "as costly as the target". Two models cost the
+same when their classes are equal and one is cheaper when its class is lower:
+an equivalence and a total order, so "cheaper" and "equal" are transitive
+(overlapping intervals were not: a ≈ b and b ≈ c with a < c). 5 % is the
+precision the timing aims at (its 90 % interval's high/low ≤ 1.05) and about
+what a cost moves between two runs; two costs either side of a class's edge
+fall into neighbouring classes however close they are, the price of a
+transitive rule. An unmeasured cost is in no class (after every class).
 
-**Pareto front.** A model is on it unless another is at least as cheap
-(cheaper: its interval entirely below; or equal in cost) with a lower image
-error, or cheaper with an equal one.
+**Order** (:func:`key`): fits compare by (cost class, image error, model
+name); the name breaks the last ties, so every comparison is deterministic.
+
+**Ranking** (:func:`ranked`): the fits whose image error is within
+:data:`TIE_FLIP` of the best are equally good and come first, by :func:`key`
+(the cheaper class first); the others follow by image error, then
+:func:`key`.
+
+**Pareto front** (:func:`front`): a fit is on it unless another is in a cost
+class no higher with an image error no higher, and better in one of the two
+(:func:`dominates`). The first-ranked fit is always on it: a fit that
+dominated it would be within the tie too, and before it by :func:`key`.
+
+**Looks the same** (:func:`tolerance`): a fit whose image error is within the
+tolerance of the best fit's looks like it. The tolerance is the target's seed
+noise — the FLIP between two renders of the target itself at different
+seeds (``image_noise_flip``, a few hundredths of FLIP's range): a model no
+further from the best than that differs from it by less than rendering the
+target again does. Without renders, :data:`LOOKS_SAME`.
+
+**The cheaper model that looks the same** (:func:`cheaper_alternative`): of
+the fits in a lower cost class than the first-ranked one that look the same
+as the best, the first by :func:`key` (the cheapest, then the best). On the
+front by the same argument as the first-ranked fit.
+
+**Verdict** (:func:`verdict`): the first-ranked fit, the cheaper model that
+looks the same with the tolerance, or "no cheaper model looks the same" and
+the closest cheaper fit; then what the cost figures can bear
+(:func:`cost_caveat`): the load average they were timed at, whether it
+exceeded the cores, and which named fit's interval did not close.
 """
 from __future__ import annotations
 
 import math
 import re
 
-TIE_FLIP = 0.005           # FLIP differences below this count as equal
+TIE_FLIP = 0.005           # FLIP differences below this count as equal in the ranking
 SMALL_FLIP = 0.05          # a best FLIP above this: no model is close; say why
+COST_BAND = 0.05           # the width of a cost class: a factor 1.05
+LOOKS_SAME = 0.02          # the tolerance without renders (the sweep's seed noise: 0.014-0.030)
+CLOSED = 1.05              # an interval with high/low above this did not close (the timing's aim)
 
 
 def ok(records: list[dict]) -> list[dict]:
@@ -30,8 +68,8 @@ def ok(records: list[dict]) -> list[dict]:
 
 def quality(r: dict) -> float:
     """The error the ranking reads: FLIP, else the objective, else the BRDF error."""
-    for key in ("image_flip", "objective_error", "brdf_error"):
-        v = r.get(key)
+    for field in ("image_flip", "objective_error", "brdf_error"):
+        v = r.get(field)
         if v is not None and math.isfinite(v):
             return float(v)
     return math.inf
@@ -39,38 +77,75 @@ def quality(r: dict) -> float:
 
 def _cost(r: dict) -> float:
     c = r.get("cost_ratio")
-    return c if c is not None and math.isfinite(c) else math.inf
+    return c if c is not None and math.isfinite(c) and c > 0 else math.inf
+
+
+def cost_class(r: dict) -> float:
+    """The fit's cost class (module docstring): round(log(cost) / log(1.05));
+    inf when the cost was not measured."""
+    c = _cost(r)
+    return math.inf if math.isinf(c) else float(round(math.log(c) / math.log(1.0 + COST_BAND)))
+
+
+def key(r: dict) -> tuple:
+    """The one order every comparison uses: cost class, image error, name."""
+    return (cost_class(r), quality(r), r.get("model", ""))
+
+
+def cheaper(a: dict, b: dict) -> bool:
+    """a is in a lower cost class than b."""
+    return cost_class(a) < cost_class(b)
+
+
+def equal_cost(a: dict, b: dict) -> bool:
+    """a and b are in the same cost class."""
+    return cost_class(a) == cost_class(b)
 
 
 def ranked(records: list[dict]) -> list[dict]:
     """The successful fits, best first (module docstring)."""
-    fits = sorted(ok(records), key=quality)
+    fits = ok(records)
     if not fits:
         return []
-    best = quality(fits[0])
-    ties = sorted((r for r in fits if quality(r) <= best + TIE_FLIP), key=lambda r: (_cost(r), quality(r)))
-    return ties + [r for r in fits if quality(r) > best + TIE_FLIP]
+    best = min(quality(r) for r in fits)
+    tie = [r for r in fits if quality(r) <= best + TIE_FLIP]
+    rest = [r for r in fits if quality(r) > best + TIE_FLIP]
+    return sorted(tie, key=key) + sorted(rest, key=lambda r: (quality(r),) + key(r))
 
 
-def cheaper(a: dict, b: dict) -> bool:
-    """a costs less than b beyond their intervals."""
-    if a.get("cost_high") is None or b.get("cost_low") is None:
-        return _cost(a) < _cost(b)
-    return a["cost_high"] < b["cost_low"]
-
-
-def equal_cost(a: dict, b: dict) -> bool:
-    return not cheaper(a, b) and not cheaper(b, a)
+def dominates(a: dict, b: dict) -> bool:
+    """a is in a cost class no higher than b's with an image error no higher,
+    and better in one of the two."""
+    ca, cb, qa, qb = cost_class(a), cost_class(b), quality(a), quality(b)
+    return ca <= cb and qa <= qb and (ca < cb or qa < qb)
 
 
 def front(records: list[dict]) -> list[dict]:
-    """The fits on the Pareto front of (cost, image error)."""
-    fits = [r for r in ok(records) if r.get("cost_ratio") is not None]
+    """The fits with a measured cost on the Pareto front of (cost class,
+    image error), by :func:`key`."""
+    fits = [r for r in ok(records) if not math.isinf(cost_class(r))]
+    return sorted((b for b in fits if not any(dominates(a, b) for a in fits if a is not b)),
+                  key=key)
 
-    def dominates(a, b):
-        qa, qb = quality(a), quality(b)
-        return ((cheaper(a, b) and qa <= qb) or (equal_cost(a, b) and qa < qb))
-    return [b for b in fits if not any(dominates(a, b) for a in fits if a is not b)]
+
+def tolerance(records: list[dict]) -> float:
+    """How far from the best FLIP a fit still looks the same: the target's
+    seed noise, else :data:`LOOKS_SAME` (module docstring)."""
+    noise = [r["image_noise_flip"] for r in ok(records) if r.get("image_noise_flip") is not None]
+    return float(noise[0]) if noise else LOOKS_SAME
+
+
+def tolerance_text(records: list[dict]) -> str:
+    """The tolerance and where it comes from, as the reports state it."""
+    seeded = any(r.get("image_noise_flip") is not None for r in ok(records))
+    return (f"FLIP {tolerance(records):.3f} of the best"
+            + (", the target's seed noise" if seeded else ""))
+
+
+def looks_the_same(r: dict, records: list[dict]) -> bool:
+    """r's image error is within :func:`tolerance` of the best fit's."""
+    fits = ok(records)
+    return bool(fits) and quality(r) <= min(map(quality, fits)) + tolerance(records)
 
 
 def target_plugin(spec: str) -> str:
@@ -86,10 +161,19 @@ def target_plugin(spec: str) -> str:
 
 
 def cheaper_alternative(order: list[dict]) -> dict | None:
-    """Of the fits that cost less than the first-ranked one beyond the
-    timing's noise, the best; None if there is none."""
+    """The cheapest fit in a lower cost class than the first-ranked one whose
+    image looks the same as the best's (module docstring); None if there is none."""
+    if not order:
+        return None
+    same = [r for r in order if cheaper(r, order[0]) and looks_the_same(r, order)]
+    return min(same, key=key) if same else None
+
+
+def closest_cheaper(order: list[dict]) -> dict | None:
+    """Of the fits in a lower cost class than the first-ranked one, the one
+    with the lowest image error (then by :func:`key`); None if none costs less."""
     cheap = [r for r in order[1:] if cheaper(r, order[0])]
-    return min(cheap, key=quality) if cheap else None
+    return min(cheap, key=lambda r: (quality(r),) + key(r)) if cheap else None
 
 
 def cost_text(r: dict) -> str:
@@ -103,19 +187,64 @@ def cost_text(r: dict) -> str:
     return text
 
 
+def closed(r: dict) -> bool:
+    """The timing's interval reached high/low ≤ :data:`CLOSED` (the record's
+    ``cost_closed`` where the run wrote it)."""
+    if r.get("cost_closed") is not None:
+        return bool(r["cost_closed"])
+    low, high = r.get("cost_low"), r.get("cost_high")
+    return low is not None and high is not None and low > 0 and high / low <= CLOSED + 1e-9
+
+
+def cost_caveat(records: list[dict], named: list[dict]) -> str:
+    """What the cost figures can bear, in words: the load average the fits
+    were timed at (and whether it exceeded the cores), and which of the
+    ``named`` fits' intervals did not close; empty if nothing was timed."""
+    timed = [r for r in ok(records) if r.get("cost_load") is not None]
+    if not timed:
+        return ""
+    loads = [r["cost_load"] for r in timed]
+    span = f"{min(loads):.1f}" if max(loads) - min(loads) < 0.05 else \
+        f"{min(loads):.1f}–{max(loads):.1f}"
+    text = f"costs timed at load average {span}"
+    cores = next((r["cost_cores"] for r in timed if r.get("cost_cores")), None)
+    if cores:
+        text += f" on {cores} cores"
+        if max(loads) > cores:
+            text += " (the machine was loaded: the costs are less sure than their intervals say)"
+    open_ = [r for r in named if r.get("cost_low") is not None and not closed(r)]
+    if open_:
+        text += "; " + "; ".join(
+            f"{r['model']}'s interval did not close (high/low {r['cost_high'] / r['cost_low']:.3f}"
+            f" after {r.get('cost_rounds', '?')} rounds, aim ≤ {CLOSED:g})" for r in open_)
+    return text
+
+
 def verdict(records: list[dict], plugin: str) -> str:
-    """One line: the first-ranked model, its FLIP and cost against the
-    target's plugin, and the best model that costs less beyond the noise."""
+    """The first-ranked model, its FLIP and cost against the target's plugin;
+    the cheaper model that looks the same, or that none does and the closest
+    cheaper one; what the cost figures can bear (:func:`cost_caveat`)."""
     order = ranked(records)
     if not order:
         return "every fit failed"
     best = order[0]
     if best.get("cost_ratio") is None:
         return f"{best['model']}: FLIP {quality(best):.3f} (render cost not measured)"
-    line = (f"{best['model']}: FLIP {quality(best):.3f}, {cost_text(best)} the cost of {plugin}")
+    line = f"{best['model']}: FLIP {quality(best):.3f}, {cost_text(best)} the cost of {plugin}"
+    tol = tolerance_text(order)
     alt = cheaper_alternative(order)
+    named = [best]
     if alt is not None:
-        line += f"; {alt['model']} is {cost_text(alt)} the cost at FLIP {quality(alt):.3f}"
-    elif best.get("cost_low") is not None:
-        line += "; no model costs less beyond the noise of the timing"
-    return line
+        named.append(alt)
+        line += (f"; {alt['model']} looks the same at {cost_text(alt)} the cost: FLIP "
+                 f"{quality(alt):.3f}, within {tol}")
+    else:
+        closest = closest_cheaper(order)
+        line += f"; no cheaper model looks the same (within {tol})"
+        if closest is not None:
+            line += (f": the closest cheaper one, {closest['model']}, is at FLIP "
+                     f"{quality(closest):.3f}")
+        else:
+            line += ": none costs less"
+    caveat = cost_caveat(order, named)
+    return line + (f". {caveat[0].upper()}{caveat[1:]}." if caveat else "")

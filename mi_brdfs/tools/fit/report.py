@@ -7,8 +7,8 @@
     options included; ``{"type": plugin, **parameters}`` loads it),
     ``image_flip`` and ``image_relmse`` (the fitted model's renders against
     the target's, mean over the standard views, same seed and spp;
-    ``image_views`` per view), ``brdf_error`` (the ``metric``'s: 0
-    identical, 1 a black BSDF's error), ``objective`` and
+    ``image_views`` per view), ``brdf_error`` (the ``metric``'s L² distance
+    over a black BSDF's: 0 identical, 1 as far as black, above 1 farther), ``objective`` and
     ``objective_error`` (what the fit minimised, and its value), ``cost_ratio``
     with ``cost_low`` and ``cost_high`` (render time over the target's: the
     90 % interval, :mod:`.cost`), ``ops_ratio`` (traced operations over the
@@ -16,8 +16,10 @@
     (the colours that matter, :mod:`.effective`), ``albedo`` and
     ``target_albedo`` ([0°, 60°, 85°][R, G, B]), ``image_noise_flip`` and
     ``image_noise_relmse`` (the target against itself at another seed: the
-    noise floor), ``cost_rounds``, ``cost_load`` (the machine's load average
-    when it was timed), ``ops``, ``reruns`` and ``worker`` (a task re-run
+    seed noise, the tolerance of "looks the same", :mod:`.rank`),
+    ``cost_rounds``, ``cost_closed`` (the interval reached the tolerance),
+    ``cost_load`` and ``cost_cores`` (the machine's load average when it was
+    timed, and its cores), ``ops``, ``reruns`` and ``worker`` (a task re-run
     after its Dask worker was lost), ``target_features``, ``xml``,
     ``renders``, ``start_errors``; a failed fit has ``error`` instead.
 ``fits.csv``
@@ -48,7 +50,8 @@ FIELDS = ("target", "model", "plugin", "rank", "parameters", "image_flip", "imag
           "brdf_error", "metric", "objective", "objective_error", "cost_ratio", "cost_low",
           "cost_high", "ops_ratio", "seconds")
 EXTRA = ("image_views", "image_noise_flip", "image_noise_relmse", "effective", "albedo",
-         "target_albedo", "cost_rounds", "cost_load", "ops", "reruns", "worker",
+         "target_albedo", "cost_rounds", "cost_closed", "cost_load", "cost_cores", "ops",
+         "reruns", "worker",
          "target_features", "xml", "renders", "start_errors", "error", "cost_error")
 CSV_EXTRA = ("effective", "image_noise_flip", "cost_rounds", "cost_load", "reruns", "xml",
              "error")
@@ -147,10 +150,10 @@ def _row(r: dict, front: set, equals: dict) -> str:
     e = r.get("effective") or {}
     params = ", ".join(f"{k}={_short(v)}" for k, v in r["parameters"].items()
                        if k not in ("type", "mode"))
-    mark = " ★" if r["model"] in front else ""
+    mark = " ★" if r.get("rank") == 1 else (" ◇" if r["model"] in front else "")
     note = []
     if equals.get(r["model"]):
-        note.append("equal cost: " + ", ".join(equals[r["model"]]))
+        note.append("same cost class: " + ", ".join(equals[r["model"]]))
     if r.get("reruns"):
         note.append(f"re-run after its worker was lost ({r['reruns']}×), finished on {r['worker']}")
     note += e.get("notes", [])
@@ -165,7 +168,13 @@ def _row(r: dict, front: set, equals: dict) -> str:
             f'<td><a href="{r["xml"]}">xml</a></td></tr>')
 
 
-HEAD = ("<tr><th>#</th><th>model</th><th>FLIP</th><th>image relMSE</th><th>BRDF error</th>"
+BRDF_ERROR = ("BRDF error: the L² distance of the fit's eval from the target's over the "
+              "direction pairs (projected solid angle), over a black BSDF's: 0 identical, 1 as "
+              "far as black. It is not bounded by 1: a lobe sharper or taller than the "
+              "target's weighs in by its height squared while the image sees its integral, "
+              "so a fit can be farther than black in L² and still look close")
+HEAD = ("<tr><th>#</th><th>model</th><th>FLIP</th><th>image relMSE</th>"
+        f'<th title="{html.escape(BRDF_ERROR)}">BRDF error (L², black = 1)</th>'
         "<th>objective</th><th>cost × (90 %)</th><th>ops ×</th><th>diffuse colour</th>"
         "<th>specular colour at 0° / 85°</th><th>albedo (max channel)</th><th>fit s</th>"
         "<th>parameters</th><th>XML</th></tr>")
@@ -183,6 +192,7 @@ def _section(out: str, name: str, rows: list[dict], found: dict | None) -> str:
     best = ok[0] if ok else None
     if best is not None and rank.quality(best) > rank.SMALL_FLIP and found:
         said = effective.describe(found)
+        said += effective.known_reasons(plugin)
         parts.append(f"<p>No course model comes close (best FLIP {rank.quality(best):.3f}). "
                      + ("What the target has that none of them has: " + "; ".join(said) + "."
                         if said else "No feature the fit can name (spectral Fresnel, "
@@ -202,9 +212,15 @@ def _section(out: str, name: str, rows: list[dict], found: dict | None) -> str:
                      f"{_albedo(ok[0]['target_albedo']).replace('<br>', ', ')}. ")
     noise = [r["image_noise_flip"] for r in ok if r.get("image_noise_flip") is not None]
     if noise:
-        parts.append(f"Noise floor (the target against itself at another seed): FLIP "
-                     f"{_fmt(noise[0])}, relMSE {_fmt(ok[0].get('image_noise_relmse'))}. "
-                     "★: on the Pareto front.</p>")
+        parts.append(f"Seed noise (the target against itself at another seed): FLIP "
+                     f"{_fmt(noise[0])}, relMSE {_fmt(ok[0].get('image_noise_relmse'))}: what "
+                     "rendering the target again changes. It is no floor for the fits: each is "
+                     "rendered at the target's own seed, so their noise largely cancels and a "
+                     "close fit can read below it. It is the tolerance: a cheaper model looks "
+                     "the same when its FLIP is within it of the best. ")
+    if ok:
+        parts.append("★: first-ranked; ◇: on the Pareto front (costs compare in classes a "
+                     f"factor {1 + rank.COST_BAND:g} wide).</p>")
     if any(r.get("renders") for r in ok):
         cells = [f'<figure><img src="{name}.jpg"><figcaption>target</figcaption></figure>']
         cells += [f'<figure><img src="{r["renders"]}"><figcaption>{r["rank"]}. '
@@ -213,6 +229,7 @@ def _section(out: str, name: str, rows: list[dict], found: dict | None) -> str:
         parts.append(f'<div class="renders">{"".join(cells)}</div>')
     if ok and "slices" in ok[0]:
         plots.slice_plot(os.path.join(out, f"{name}__slices.png"), rows[0]["target"], ok[0], ok)
+    if ok and os.path.exists(os.path.join(out, f"{name}__slices.png")):   # or drawn by the run
         parts.append(f'<img src="{name}__slices.png" alt="lobe slices" class="wide">')
     return "\n".join(parts)
 
@@ -249,10 +266,15 @@ per viewer {s.uniform[0]}×{s.uniform[1]} uniform lights and {s.lobe} mirror-gui
 roughness): {s.scan} candidate shapes with their colours by least squares, the best {s.starts}
 refined by Levenberg-Marquardt. Ranked by FLIP, the mean over the views
 ({", ".join(VIEWS)}: a sphere, {s.res}² pixels, {s.spp} spp, model and target at the same seed);
-FLIP within {rank.TIE_FLIP} of the best counts as equal, the cheaper first. BRDF error: 0
-identical, 1 a black BSDF's. Render cost: the model's time over the target's, each in a process
-of its own, until the 90 % interval is within {s.cost_tolerance:.0%} (rounds
-{s.cost_rounds[0]}–{s.cost_rounds[1]}); ops: Dr.Jit operations of a traced eval and sample over
-the target's. See <code>docs/guide/fit.md</code>.</p>
+FLIP within {rank.TIE_FLIP} of the best counts as equal, the cheaper first. Costs compare by
+class (a factor {1 + rank.COST_BAND:g} wide, class 0 as costly as the target): the ranking, the
+front, the ★ and the verdict use that one rule. The verdict's cheaper model is the cheapest
+whose FLIP is within the tolerance of the best: the target's seed noise (the target against
+itself at another seed; {rank.LOOKS_SAME} without renders); if none is, it says so.
+{html.escape(BRDF_ERROR, quote=False)}.
+Render cost: the model's time over the target's, each in a process of its own, until the 90 % interval is within {s.cost_tolerance:.0%} or after
+{s.cost_rounds[1]} rounds (at least {s.cost_rounds[0]}); the verdict says when an interval did
+not close, and the load it was timed at; ops: Dr.Jit operations of a traced eval and sample
+over the target's. See <code>docs/guide/fit.md</code>.</p>
 """
     return pages.page("mi-brdfs fit", about + "".join(sections), css=FIT_CSS)

@@ -148,6 +148,12 @@ def parse_shorthand(spec: str) -> tuple:
     return tuple(props)
 
 
+def without_source(message: str) -> str:
+    """A Mitsuba message without its source-file prefix (``[parser.cpp:444] ``):
+    a user reads what went wrong, not where in Mitsuba it was noticed."""
+    return re.sub(r"^\[[\w.+-]+\.(?:cpp|h|py):\d+\]\s*", "", message)
+
+
 def bsdf_xml(path: str) -> str:
     """The XML text of a file holding a ``<bsdf>`` (root, or the only one at
     the top level of a scene), with a version attribute."""
@@ -158,10 +164,13 @@ def bsdf_xml(path: str) -> str:
     except OSError as error:
         raise TargetError(f"target {path}: cannot read it ({error.strerror})") from None
     if root.tag != "bsdf":
+        expected = "valid: a <bsdf> root, or a <scene> with exactly one <bsdf> at its top level"
+        if root.tag != "scene":
+            raise TargetError(f"target {path}: its root is <{root.tag}>; {expected}")
         found = [e for e in root if e.tag == "bsdf"]
-        if root.tag != "scene" or len(found) != 1:
-            raise TargetError(f"target {path}: the file holds no <bsdf> root (nor a scene with "
-                              f"exactly one top-level <bsdf>; found {len(found)})")
+        if len(found) != 1:
+            raise TargetError(f"target {path}: its <scene> has {len(found)} <bsdf> at its top "
+                              f"level (a <bsdf> inside a <shape> is not counted); {expected}")
         version = root.get("version", "3.0.0")
         root = found[0]
         root.set("version", version)
@@ -222,7 +231,7 @@ def check(target: Target) -> None:
     except TargetError:
         raise
     except Exception as error:
-        raise TargetError(f"target {target.spec}: {one_line(error)}") from None
+        raise TargetError(f"target {target.spec}: {without_source(one_line(error))}") from None
     try:
         if not isinstance(bsdf, mi.BSDF):
             raise TargetError(f"target {target.spec}: it loads as a {type(bsdf).__name__}, "

@@ -19,15 +19,17 @@ anisotropic Ward and Cook-Torrance for it).
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import os
 import statistics
 import sys
 
 from ..errors import one_line
-from . import effective, fit, rank, targets as T
+from . import effective, fit, rank, report, targets as T
 from .models import EC, names
 from .sweep import progress_printer
+from .task import FULL
 
 PLASTIC = "diffuse_reflectance=[0.6,0.2,0.1]"
 TARGETS = (          # (label, target)
@@ -80,13 +82,24 @@ def subset_note(targets) -> str:
             "(or `mi-brdfs bench --group trade`).\n\n")
 
 
+CAPTION = ("Each cell: the FLIP of the model's image against the material's, then, after the "
+           "dot, its BRDF error (L² over a black BSDF's: 0 identical, 1 as far as black, above 1 "
+           "farther); bold: the first-ranked fit per material (the cheapest cost class among "
+           f"the fits within FLIP {rank.TIE_FLIP} of the best). Cost ×: the model's median render "
+           "time over the material's own, with the medians of its 90 % intervals' ends; ops ×: "
+           "its median Dr.Jit operation count over the material's.")
+
+
 def table(records: list[dict], labels: dict[str, str] | None = None) -> str:
     """"Which model for which material": a Markdown table, one row per model,
     its median render cost over the targets (× the target's, with the median
     of its interval's ends) and its median operation count (× the target's),
     and on each target its image FLIP and its BRDF error (``0.06 · 0.110``);
-    the first-ranked model per target in bold."""
+    the first-ranked model per target (:func:`.rank.ranked`) in bold, as
+    :data:`CAPTION` says."""
     labels = labels or {}
+    first = {spec: id(order[0]) for spec in dict.fromkeys(r["target"] for r in records)
+             if (order := rank.ranked([r for r in records if r["target"] == spec]))}
     specs = list(dict.fromkeys(r["target"] for r in records))
     canonical = {name: i for i, name in enumerate(names())}          # the models' own order
     models = sorted(dict.fromkeys(r["model"] for r in records),
@@ -111,7 +124,7 @@ def table(records: list[dict], labels: dict[str, str] | None = None) -> str:
                 continue
             flip = r.get("image_flip")
             text = (f"{flip:.2f} · " if flip is not None else "") + f"{r['brdf_error']:.3f}"
-            row.append(f"**{text}**" if r.get("rank") == 1 else text)
+            row.append(f"**{text}**" if first.get(s) == id(r) else text)
         lines.append("| " + " | ".join(row) + " |")
     return "\n".join(lines) + "\n\n" + answers(records, labels)
 
@@ -170,11 +183,11 @@ def compensation_effect(records: list[dict]) -> tuple[int, int, int]:
 def summary(records: list[dict], labels: dict[str, str] | None = None) -> str:
     """The README's "which model for my material" table: per material, the
     first-ranked model with its image FLIP and render cost (× the material's
-    own plugin, 90 % interval), and the best model that costs less beyond the
-    timing's noise (:func:`.rank.cheaper_alternative`)."""
+    own plugin, 90 % interval), and the cheaper model that looks the same
+    (:func:`.rank.cheaper_alternative`), or "none" with the closest cheaper one."""
     labels = labels or {}
-    lines = ["| material | first-ranked model | FLIP | cost × (90 %) | cheaper beyond the noise |",
-             "|---|---|---|---|---|"]
+    lines = ["| material | first-ranked model | FLIP | cost × (90 %) | "
+             "cheaper model that looks the same |", "|---|---|---|---|---|"]
     for spec in dict.fromkeys(r["target"] for r in records):
         order = rank.ranked([r for r in records if r["target"] == spec])
         if not order:
@@ -182,15 +195,48 @@ def summary(records: list[dict], labels: dict[str, str] | None = None) -> str:
             continue
         best, alt = order[0], rank.cheaper_alternative(order)
         cost = "–" if best.get("cost_ratio") is None else rank.cost_text(best)
-        other = ("–" if alt is None else
-                 f"`{alt['model']}`: FLIP {rank.quality(alt):.3f} at {rank.cost_text(alt)}")
+        if alt is not None:
+            other = f"`{alt['model']}`: FLIP {rank.quality(alt):.3f} at {rank.cost_text(alt)}"
+        else:
+            closest = rank.closest_cheaper(order)
+            other = ("none: no model costs less" if closest is None else
+                     f"none (closest: `{closest['model']}`, FLIP {rank.quality(closest):.3f})")
         lines.append(f"| {labels.get(spec, spec)} | `{best['model']}` | "
                      f"{rank.quality(best):.3f} | {cost} | {other} |")
     return "\n".join(lines)
 
 
+def rebuild(folder: str, targets=TARGETS) -> list[dict]:
+    """The trade report in ``folder`` written again from its ``fits.json``,
+    with no fit and no timing: the ranks, the verdicts, the Pareto plots,
+    ``index.html``, ``fits.json``/``fits.csv`` in rank order and ``trade.md``,
+    as the current ranking and report writers make them (the renders, the XML
+    and the lobe slices the run drew stay as they are). The run's settings are
+    taken to be :data:`.task.FULL`'s, as the sweep's."""
+    with open(os.path.join(folder, "fits.json"), encoding="utf-8") as f:
+        records = json.load(f)
+    specs = list(dict.fromkeys(r["target"] for r in records))
+    names = {t.spec: t.name for t in T.parse(specs)}
+    features = {}
+    for r in records:
+        r["target_name"] = names[r["target"]]
+        if r.get("xml") and not r["xml"].startswith(r["target_name"] + "__"):
+            raise ValueError(f"{folder}: {r['xml']} is not named after {r['target_name']}; "
+                             "the targets are not in the sweep's order")
+        if r.get("target_features"):
+            features[r["target_name"]] = r["target_features"]
+    ordered = report.write(folder, records, FULL, "mi_brdfs.tools.fit.trade.fit_materials",
+                           features)
+    labels = dict((spec, label) for label, spec in targets)
+    chosen = tuple((label, spec) for label, spec in targets if spec in names)
+    with open(os.path.join(folder, "trade.md"), "w", encoding="utf-8") as f:
+        f.write(subset_note(chosen) + table(ordered, labels))
+    return ordered
+
+
 def main(argv: list[str] | None = None) -> int:
-    """``python -m mi_brdfs.tools.fit.trade -o DIR [--quick] [-j N] [--materials LABEL ...]``."""
+    """``python -m mi_brdfs.tools.fit.trade -o DIR [--quick] [-j N] [--materials LABEL ...]``;
+    ``--from-records``: :func:`rebuild` instead of a sweep."""
     p = argparse.ArgumentParser(prog="python -m mi_brdfs.tools.fit.trade",
                                 description="The trade sweep: every course model fitted to "
                                             "the fixed materials; a fit report with trade.md.")
@@ -201,7 +247,18 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--materials", nargs="+", metavar="LABEL", default=None,
                    help="only these materials, by label (default: all): "
                         + "; ".join(label for label, _ in TARGETS))
+    p.add_argument("--from-records", action="store_true",
+                   help="fit nothing: write the report in -o DIR again from its fits.json "
+                        "(ranks, verdicts, Pareto plots, index.html, trade.md)")
     args = p.parse_args(argv)
+    if args.from_records:
+        try:
+            records = rebuild(args.output)
+        except Exception as error:
+            print(f"{p.prog}: error: {one_line(error)}", file=sys.stderr)
+            return 1
+        print(f"{os.path.join(args.output, 'trade.md')}: {len(records)} records written again")
+        return 0
     chosen = TARGETS
     if args.materials:
         known = dict(TARGETS)

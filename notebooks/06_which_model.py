@@ -44,8 +44,8 @@ print(len(records), "fits")
 # ## Image error against cost, per material
 # Each point is one model's fit, its cost with its 90 % interval. The red
 # line joins the Pareto front: the models no other model beats in image
-# error at a lower cost — two models whose cost intervals overlap cost the
-# same. The numbers follow the front from the cheapest.
+# error at a lower cost — costs compare in classes a factor 1.05 wide, the
+# fit's one comparison rule. The numbers follow the front from the cheapest.
 
 # %%
 specs = list(dict.fromkeys(r["target"] for r in records))

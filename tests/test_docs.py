@@ -429,10 +429,7 @@ def test_no_repository_paths_in_page_bodies(site):
     assert repository_paths("<article><p>see tests/test_docs.py</p></article>")   # the check bites
 
 
-REPORTS = ["reports/validation/index.html",
-           pytest.param("reports/trade/index.html", marks=pytest.mark.xfail(
-               reason="issue 38, item 6: the trade report says 'See docs/guide/fit.md' (its "
-                      "page is the fit command's)", strict=False))]
+REPORTS = ["reports/validation/index.html", "reports/trade/index.html"]
 
 
 @pytest.mark.parametrize("report", REPORTS)

@@ -275,6 +275,6 @@ itself at another seed; {rank.LOOKS_SAME} without renders); if none is, it says 
 Render cost: the model's time over the target's, each in a process of its own, until the 90 % interval is within {s.cost_tolerance:.0%} or after
 {s.cost_rounds[1]} rounds (at least {s.cost_rounds[0]}); the verdict says when an interval did
 not close, and the load it was timed at; ops: Dr.Jit operations of a traced eval and sample
-over the target's. See <code>docs/guide/fit.md</code>.</p>
+over the target's. The documentation's fit guide explains each figure.</p>
 """
     return pages.page("mi-brdfs fit", about + "".join(sections), css=FIT_CSS)

@@ -66,18 +66,45 @@ def test_the_build_writes_nothing_into_the_source_tree(build):
 #  Plugin pages
 # ----------------------------------------------------------------------------
 
-def table_names(site: str, page: str) -> set[str]:
-    """The names in the first column of the page's parameter table (code literals)."""
+def table_rows(site: str, page: str) -> dict[str, list[str]]:
+    """The page's parameter table: each body row's cells as text, by its first
+    cell (the parameter's or option's name)."""
     table = read(site, page).split("<table", 1)[1].split("</table>", 1)[0]
-    rows = re.findall(r"<tr[^>]*>\s*<td[^>]*>(.*?)</td>", table, flags=re.S)
-    return {html.unescape(re.sub(r"<[^>]+>", "", r)).strip() for r in rows}
+    body = table.split("<tbody", 1)[1]
+    rows = [[plain(c) for c in re.findall(r"<td[^>]*>(.*?)</td>", r, flags=re.S)]
+            for r in re.findall(r"<tr[^>]*>(.*?)</tr>", body, flags=re.S)]
+    return {r[0]: r for r in rows}
 
 
 @pytest.mark.parametrize("cls", PLUGINS, ids=lambda c: c.name)
 def test_plugin_page_names_every_parameter_and_option(site, cls):
-    names = table_names(site, f"plugins/{cls.name}.html")
+    names = set(table_rows(site, f"plugins/{cls.name}.html"))
     declared = {p.name for p in cls.PARAMS} | {o.name for o in cls.all_options()}
     assert declared <= names, f"missing from the page's table: {sorted(declared - names)}"
+
+
+@pytest.mark.parametrize("cls", PLUGINS, ids=lambda c: c.name)
+def test_plugin_page_flags_are_what_traverse_puts(site, cls):
+    """The table's flags column (Mitsuba's P, ∂, D) says what ``mi.traverse``
+    of the loaded plugin gives: P for each key it exposes, ∂ unless flagged
+    NonDifferentiable, D if flagged Discontinuous; options carry none. The
+    legend sits under the table."""
+    import mitsuba as mi
+    page = read(site, f"plugins/{cls.name}.html")
+    rows = table_rows(site, f"plugins/{cls.name}.html")
+    params = mi.traverse(mi.load_dict({"type": cls.name}))
+    assert len(params.keys()) > 0
+    for key in params.keys():
+        f = params.flags(key)
+        expected = ["P"] + ([] if f & mi.ParamFlags.NonDifferentiable else ["∂"]) \
+            + (["D"] if f & mi.ParamFlags.Discontinuous else [])
+        assert rows[key.split(".")[0]][-1].split() == expected, key
+    for o in cls.all_options():
+        assert rows[o.name][-1] == "", o.name
+    assert "P exposed by mi.traverse" in plain(page) and "D discontinuous" in plain(page)
+    if cls.name == "cook_torrance":          # the roughness: exposed, differentiable, discontinuous
+        assert rows["alpha"][-1] == "P ∂ D" and rows["f0"][-1] == "P ∂"
+        assert rows["distribution"][-1] == ""
 
 
 @pytest.mark.parametrize("cls", PLUGINS, ids=lambda c: c.name)

@@ -113,17 +113,34 @@ def _row(name: str, kind: str, doc: str, default: str, constants: dict[str, floa
             *(f"       {line}" for line in lines[1:]), f"     - {default}"]
 
 
+FLAG_LEGEND = ("Flags: **P** exposed by ``mi.traverse`` (``params.update()`` changes it), "
+               "**∂** differentiable, **D** discontinuous (the sampler moves with it); "
+               "options (no flag) are fixed at load time.")
+
+
+def flags(cls, p) -> str:
+    """A parameter's flags as Mitsuba's plugin pages print them (P, ∂, D),
+    read from the flags the plugin's ``traverse`` puts it with (every
+    declared parameter it reads is put, so exposed)."""
+    import mitsuba as mi
+    f = cls.traverse_flags(p)         # Differentiable is 0: the absence of NonDifferentiable
+    return " ".join(["P"] + ([] if f & mi.ParamFlags.NonDifferentiable else ["∂"])
+                    + (["D"] if f & mi.ParamFlags.Discontinuous else []))
+
+
 def parameter_table(cls) -> str:
     """The reStructuredText table of a plugin's parameters and options, made
     from its declarations (``PARAMS``, the model's ``OPTIONS``, then the
-    base's): the one source of the plugin's parameter documentation."""
-    rows = [".. list-table::", "   :header-rows: 1", "   :widths: 20 20 50 10", "",
-            "   * - Parameter", "     - Type", "     - Description", "     - Default"]
+    base's): the one source of the plugin's parameter documentation. Its
+    flags column and the legend under it are Mitsuba's (:func:`flags`)."""
+    rows = [".. list-table::", "   :header-rows: 1", "   :widths: 18 18 46 10 8", "",
+            "   * - Parameter", "     - Type", "     - Description", "     - Default",
+            "     - Flags"]
     constants = constants_of(cls)
     for p in cls.PARAMS:
-        kind = FORMS[p.kind] + _range(p.lo, p.hi) + " (∂)"
+        kind = FORMS[p.kind] + _range(p.lo, p.hi)
         rows += _row(p.name, kind, p.doc, "none" if p.optional else number(p.default),
-                     constants)
+                     constants) + [f"     - {flags(cls, p)}"]
     for o in cls.OPTIONS + tuple(o for o in cls.all_options() if o not in cls.OPTIONS):
         doc = o.doc
         if isinstance(o.default, bool):
@@ -133,8 +150,8 @@ def parameter_table(cls) -> str:
         else:
             kind, default = "string", f'``"{o.default}"``'
             doc += " One of " + ", ".join(f'``"{c}"``' for c in o.choices) + "."
-        rows += _row(o.name, kind, doc, default, constants)
-    return "\n".join(rows)
+        rows += _row(o.name, kind, doc, default, constants) + ["     -"]
+    return "\n".join(rows + ["", FLAG_LEGEND])
 
 
 # ----------------------------------------------------------------------------

@@ -182,12 +182,17 @@ class BRDF(Mixture):
             self.state.live.add(p.name)
         return value
 
+    @staticmethod
+    def traverse_flags(p: Param) -> mi.ParamFlags:
+        """The flags ``traverse`` puts parameter ``p`` with (the plugin pages'
+        flags column reads them): differentiable; a roughness also moves the
+        sampler, so discontinuous too, as Mitsuba flags roughconductor's alpha."""
+        return mi.ParamFlags.Differentiable | (mi.ParamFlags.Discontinuous if p.discontinuous
+                                               else mi.ParamFlags(0))
+
     def traverse(self, cb):
         for name, p in self.state.params.items():
-            # a roughness moves the sampler: differentiable and discontinuous, as
-            # Mitsuba flags roughconductor's alpha
-            flags = mi.ParamFlags.Differentiable | (mi.ParamFlags.Discontinuous if p.discontinuous
-                                                     else mi.ParamFlags(0))
+            flags = self.traverse_flags(p)
             box = self.state.boxes.get(name)
             if box is None:
                 cb.put(name, getattr(self, "m_" + name), flags)

@@ -6,6 +6,8 @@ per-channel lobe slices, and the smaller checks: black or non-finite targets
 refused, a repeated target fitted once, a partial trade sweep said so."""
 import json
 import math
+import re
+from pathlib import Path
 
 import drjit as dr
 import numpy as np
@@ -18,6 +20,7 @@ from mi_brdfs.tools.fit import effective, fit, metric, models, optimise, targets
 TINY = task.QUICK.replace(viewers=(4, 2), uniform=(4, 4), lobe=4, scan=4, starts=1, steps=20,
                           res=24, spp=4, cost=False)
 GOLD = "roughconductor:material=Au,alpha=0.1"
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def schlick(f0, cos_theta):
@@ -98,11 +101,33 @@ def test_the_report_says_why_no_model_comes_close_and_what_each_fit_means(tmp_pa
         assert r["target_features"]["whitening"]["present"]
     assert saved["phong"]["effective"]["specular_0"] == saved["phong"]["parameters"][
         "specular_reflectance"]
+    assert_contents_link_each_section(html, 1)
     # Lobe slices per colour channel: [viewer angle][channel][point].
     for r in records:
         for side in ("target", "model"):
             assert np.array(r["slices"][side]).shape == (len(task.SLICE_ANGLES), 3,
                                                          task.SLICE_POINTS)
+
+
+def assert_contents_link_each_section(page: str, targets: int) -> None:
+    """The page's table of contents links each target's section, in order;
+    every in-page link (the contents' and each section's back to top) names
+    an id the page has."""
+    ids = re.findall(r'\bid="([^"]+)"', page)
+    links = re.findall(r'href="#([^"]*)"', page)
+    contents = page.split('<nav id="contents">', 1)[1].split("</nav>", 1)[0]
+    sections = re.findall(r'<h2 id="([^"]+)">', page)
+    assert len(sections) == targets and len(set(ids)) == len(ids)
+    assert re.findall(r'href="#([^"]*)"', contents) == sections
+    assert links.count("top") == targets and set(links) <= set(ids)
+
+
+def test_the_committed_trade_report_has_contents_and_links_back():
+    page = (ROOT / "docs" / "benchmarks" / "trade" / "index.html").read_text()
+    targets = len({r["target"] for r in json.loads(
+        (ROOT / "docs" / "benchmarks" / "trade" / "fits.json").read_text())})
+    assert targets > 1
+    assert_contents_link_each_section(page, targets)
 
 
 def test_a_repeated_target_is_fitted_once_with_a_warning(tmp_path):

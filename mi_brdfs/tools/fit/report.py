@@ -111,8 +111,9 @@ def write(out: str, records: list[dict], settings, command: str, features: dict 
         for r in ordered:
             w.writerow([json.dumps(r.get(k)) if k in ("parameters", "effective") else r.get(k)
                         for k in FIELDS + CSV_EXTRA])
+    contents = [(name, rows[0]["target"]) for name, rows in by_target.items()]
     with open(os.path.join(out, "index.html"), "w") as f:
-        f.write(_html(sections, settings, command))
+        f.write(_html(sections, settings, command, contents))
     return ordered
 
 
@@ -185,7 +186,8 @@ def _section(out: str, name: str, rows: list[dict], found: dict | None) -> str:
     failed = [r for r in rows if "error" in r]
     title = html.escape(rows[0]["target"])
     plugin = rank.target_plugin(rows[0]["target"])
-    parts = [f'<h2 id="{name}">{title}</h2>',
+    parts = [f'<h2 id="{html.escape(name)}">{title}</h2>',
+             '<p class=top><a href="#top">↑ back to top</a></p>',
              f"<p class=verdict>{html.escape(rank.verdict(rows, plugin))}</p>"]
     if not ok:
         parts.append("<p>every fit failed.</p>")
@@ -252,14 +254,25 @@ td.p { font-size: 0.85em; max-width: 36em; }
 figure { text-align: center; font-size: 0.7em; }
 .renders img { height: 96px; }
 img.wide { max-width: 100%; }
+p.top { font-size: 0.8em; margin-top: -0.5em; }
 """
 
 
-def _html(sections: list[str], settings, command: str) -> str:
+def _contents(contents: list[tuple[str, str]]) -> str:
+    """The table of contents: a link to each target's section (its heading's id)."""
+    items = "".join(f'<li><a href="#{html.escape(name)}">{html.escape(title)}</a></li>'
+                    for name, title in contents)
+    return f'<nav id="contents"><h2>Contents</h2><ol>{items}</ol></nav>\n'
+
+
+def _html(sections: list[str], settings, command: str,
+          contents: list[tuple[str, str]] = ()) -> str:
     """The page (the project's shared builder, :mod:`..pages`): the command,
-    how the fits were made and measured, then a section per target."""
+    how the fits were made and measured, the table of contents (``contents``:
+    each section's id and title), then a section per target, each with a
+    link back to the top."""
     s = settings
-    about = f"""<p><code>{html.escape(command)}</code></p>
+    about = f"""<p id="top"><code>{html.escape(command)}</code></p>
 <p>Each course model (hdr mode) fitted to each target on the <b>{s.objective}</b>-compressed
 values of the <b>{s.metric}</b> metric's direction pairs ({s.viewers[0]}×{s.viewers[1]} viewers;
 per viewer {s.uniform[0]}×{s.uniform[1]} uniform lights and {s.lobe} mirror-guided ones per
@@ -277,4 +290,5 @@ Render cost: the model's time over the target's, each in a process of its own, u
 not close, and the load it was timed at; ops: Dr.Jit operations of a traced eval and sample
 over the target's. The documentation's fit guide explains each figure.</p>
 """
-    return pages.page("mi-brdfs fit", about + "".join(sections), css=FIT_CSS)
+    return pages.page("mi-brdfs fit", about + _contents(list(contents)) + "".join(sections),
+                      css=FIT_CSS)

@@ -2,6 +2,7 @@
 metadata, PNG, JPEG), Mitsuba's flags, every number checked (one line, exit 1,
 never a signal), the default output beside the scene, progress in a pipe."""
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -151,6 +152,19 @@ def test_zero_spp_is_an_error_not_a_signal(tmp_path, how):
     lines = out.stderr.strip().splitlines()
     assert len(lines) == 1 and message in lines[0], out.stderr
     assert not (tmp_path / "x.exr").exists()
+
+
+def test_a_scene_mitsuba_refuses_reads_without_its_source_prefix(tmp_path, monkeypatch, capsys):
+    """Mitsuba's parser starts its messages with "[parser.cpp:NNN] ": the
+    command's one line says what is wrong, not where in Mitsuba."""
+    scene = tmp_path / "unknown.xml"
+    scene.write_text((SCENES / "lambert.xml").read_text().replace('type="lambert"',
+                                                                   'type="no_such_bsdf"', 1))
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(["render", str(scene), "-D", "res=8"]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "no_such_bsdf" in err[0], err
+    assert not re.search(r"\[\w+\.(cpp|h|py):\d+\]", err[0]), err[0]
 
 
 def test_mitsuba_flags(tmp_path, monkeypatch, capsys):

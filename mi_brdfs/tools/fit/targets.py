@@ -148,12 +148,6 @@ def parse_shorthand(spec: str) -> tuple:
     return tuple(props)
 
 
-def without_source(message: str) -> str:
-    """A Mitsuba message without its source-file prefix (``[parser.cpp:444] ``):
-    a user reads what went wrong, not where in Mitsuba it was noticed."""
-    return re.sub(r"^\[[\w.+-]+\.(?:cpp|h|py):\d+\]\s*", "", message)
-
-
 def bsdf_xml(path: str) -> str:
     """The XML text of a file holding a ``<bsdf>`` (root, or the only one at
     the top level of a scene), with a version attribute."""
@@ -231,7 +225,7 @@ def check(target: Target) -> None:
     except TargetError:
         raise
     except Exception as error:
-        raise TargetError(f"target {target.spec}: {without_source(one_line(error))}") from None
+        raise TargetError(f"target {target.spec}: {one_line(error)}") from None
     try:
         if not isinstance(bsdf, mi.BSDF):
             raise TargetError(f"target {target.spec}: it loads as a {type(bsdf).__name__}, "

@@ -204,23 +204,6 @@ PLASTIC_MU = Axis("mu", 0.0, 1.0, 64)
 PLASTIC_NODES = 64               # Gauss-Legendre nodes per slope axis of the quadrature
 
 
-def _erf(x):
-    """erf of a NumPy array (Abramowitz & Stegun 7.1.26, within 1.5e-7)."""
-    t = 1.0 / (1.0 + 0.3275911 * np.abs(x))
-    poly = t * (0.254829592 + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027
-                                                                          + t * 1.061405429))))
-    return np.sign(x) * (1.0 - poly * np.exp(-x * x))
-
-
-def _smith_g1(distribution: str, alpha: float, z, r):
-    """Smith's G1 of a direction with cos θ = |z| (r = sin θ), NumPy."""
-    tan2 = (r / np.maximum(np.abs(z), 1e-300)) ** 2
-    if distribution == "ggx":
-        return 2.0 / (1.0 + np.sqrt(1.0 + alpha * alpha * tan2))
-    a = 1.0 / np.maximum(alpha * np.sqrt(tan2), 1e-300)
-    return 2.0 / (1.0 + _erf(a) + np.exp(-a * a) / (a * math.sqrt(math.pi)))
-
-
 def _fresnel_dielectric_np(c, eta):
     """The exact dielectric reflectance (light from outside, relative index η), NumPy."""
     s2_t = (1.0 - c * c) / (eta * eta)
@@ -253,7 +236,7 @@ def _visible_normals(distribution: str, alpha: float, mu: np.ndarray):
     p22 = (1.0 / (np.pi * (1.0 + r2) ** 2) if distribution == "ggx"
            else np.exp(-r2) / np.pi)                     # P22 in the scaled slopes
     lam = np.maximum(mu3 - alpha * x * sin_t, 0.0)        # ω·m / cos θ_m
-    g1 = _smith_g1(distribution, alpha, mu3, sin_t)
+    g1 = mf.g1_np(distribution, alpha, mu3, sin_t)
     w = g1 / np.maximum(mu3, 1e-300) * p22 * lam * dx * dy
     norm = 1.0 / np.sqrt(1.0 + alpha * alpha * r2)
     m = np.stack(np.broadcast_arrays(-alpha * x * norm, -alpha * y * norm, norm))
@@ -282,7 +265,7 @@ def plastic_tables(distribution: str, alpha: float, eta: float) -> tuple[np.ndar
         else:                  # ω_o = 2 (ω_i·m) m - ω_i
             wo = 2.0 * c * m - wi
             value, keep = F, wo[2] > 0.0
-        g1 = _smith_g1(distribution, alpha, wo[2], np.hypot(wo[0], wo[1]))
+        g1 = mf.g1_np(distribution, alpha, wo[2], np.hypot(wo[0], wo[1]))
         return np.sum(np.where(keep & (c > 0), value * g1, 0.0) * w, axis=1)
 
     with np.errstate(over="ignore", under="ignore", divide="ignore", invalid="ignore"):
@@ -369,11 +352,6 @@ FRESNEL_PARAMS = {"schlick": (), "conductor": ("eta", "kappa"),
                   "dielectric": ("int_ior", "ext_ior"), "f82": ("f82_tint",)}
 IOR_MIN = 1e-3                   # the smallest index of refraction accepted (> 0)
 STRING = mi.Properties.Type.String
-
-
-def plain(x) -> float:
-    """A plain-number parameter's value as a Python float (an opaque Float in JIT variants)."""
-    return float(x) if isinstance(x, (int, float)) else float(np.array(dr.detach(x)).ravel()[0])
 
 
 def ior_data() -> str:
@@ -575,7 +553,7 @@ class CookTorrance(BRDF):
         """The transmittance table and internal reflectance of the interface at
         the current roughness and index (:func:`plastic_tables`)."""
         alpha = min(max(value_range(self.m_alpha)[0], mf.ALPHA_MIN), mf.ALPHA_MAX)
-        eta = plain(self.m_int_ior) / plain(self.m_ext_ior)
+        eta = value_range(self.m_int_ior)[0] / value_range(self.m_ext_ior)[0]
         t, r = plastic_tables(self.options.distribution, float(np.float32(alpha)), eta)
         self.state.plastic = Grid((PLASTIC_MU,), t)
         self.m_plastic_t = self.state.plastic.data          # traversed: frozen functions

@@ -186,10 +186,27 @@ def _blinn_projected_area(mu: np.ndarray, rho: float, nodes) -> np.ndarray:
     return ring @ (d * np.sin(theta_m) * d_theta)
 
 
+def erf_np(x: np.ndarray) -> np.ndarray:
+    """erf of a NumPy array (Abramowitz & Stegun 7.1.26, within 1.5e-7), vectorised."""
+    t = 1.0 / (1.0 + 0.3275911 * np.abs(x))
+    poly = t * (0.254829592 + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027
+                                                                          + t * 1.061405429))))
+    return np.sign(x) * (1.0 - poly * np.exp(-x * x))
+
+
 def _g1_beckmann_np(a: np.ndarray) -> np.ndarray:
+    """Beckmann's Smith G1 at a = cos θ / (α sin θ), NumPy."""
     a = np.asarray(a, dtype=np.float64)
-    erf_a = np.array([math.erf(v) for v in a.ravel()]).reshape(a.shape)
-    return 2.0 * a * math.sqrt(math.pi) / (a * math.sqrt(math.pi) * (1.0 + erf_a) + np.exp(-a * a))
+    return 2.0 * a * math.sqrt(math.pi) / (a * math.sqrt(math.pi) * (1.0 + erf_np(a)) + np.exp(-a * a))
+
+
+def g1_np(kind: str, alpha: float, cos_theta, sin_theta) -> np.ndarray:
+    """Smith's G1 of a direction (cos θ taken as |cos θ|) for ``kind`` "ggx" or
+    "beckmann", NumPy (for tables made at load time)."""
+    tan2 = (sin_theta / np.maximum(np.abs(cos_theta), 1e-300)) ** 2
+    if kind == "ggx":
+        return 2.0 / (1.0 + np.sqrt(1.0 + alpha * alpha * tan2))
+    return _g1_beckmann_np(1.0 / np.maximum(alpha * np.sqrt(tan2), 1e-300))
 
 
 # G1 of the Blinn distribution over (t, rho), t = a / (1 + a), a = cos θ/(rho sin θ):

@@ -55,6 +55,39 @@ def test_models_are_every_plugin_and_the_builtins(ex):
     assert ward["alpha"] and not ward["alpha_u"] and not ward["alpha_v"]
 
 
+def test_the_parameters_an_option_exposes_have_controls_with_that_choice(ex):
+    when = {p["name"]: (p["control"], p.get("when")) for p in ex.models["cook_torrance"]["params"]}
+    assert when["eta"] == when["kappa"] == (False, {"fresnel": ["conductor"]})
+    assert when["int_ior"] == when["ext_ior"] == (False, {"fresnel": ["dielectric"]})
+    assert when["f82_tint"] == (False, {"fresnel": ["f82"]})
+    assert when["alpha"] == (True, None)
+    # no other course model has a parameter that only an option exposes
+    others = [(m["name"], p["name"]) for m in ex.public_models() if m["name"] != "cook_torrance"
+              for p in m["params"] if "when" in p]
+    assert others == []
+
+
+def test_a_new_eta_goes_through_traverse_and_equals_roughconductor(ex):
+    """The conductor's index is a parameter of the configuration: a new value
+    reuses the loaded BSDF (no load per slider step) and takes effect, as
+    Mitsuba's roughconductor with the same index shows."""
+    base = {"type": "cook_torrance", "distribution": "ggx", "geometry": "smith",
+            "fresnel": "conductor", "k": 0.0, "alpha": 0.25, "kappa": [3.0, 2.5, 2.0]}
+    _, first = ex.prepare({**base, "eta": [0.2, 0.4, 1.1]})
+    _, second = ex.prepare({**base, "eta": [1.5, 0.9, 0.3]})
+    assert second is first
+    rng = np.random.default_rng(5)
+    wi, wo = random_hemisphere(rng, 64, 0.05), random_hemisphere(rng, 64, 0.05)
+    si = surface(wi)
+    ours = np.array(second.bsdf.eval(mi.BSDFContext(), si, vec(wo)))
+    theirs = np.array(mi.load_dict({
+        "type": "roughconductor", "distribution": "ggx", "alpha": 0.25,
+        "eta": {"type": "rgb", "value": [1.5, 0.9, 0.3]},
+        "k": {"type": "rgb", "value": [3.0, 2.5, 2.0]}}).eval(mi.BSDFContext(), si, vec(wo)))
+    assert np.abs(theirs).max() > 0.1
+    assert np.allclose(ours, theirs, rtol=1e-4, atol=1e-5)
+
+
 def test_a_material_is_completed_with_the_defaults(ex):
     m = M.complete(ex.models, {"type": "cook_torrance", "alpha": 1, "diffuse_reflectance": 0.2})
     assert list(m)[:2] == ["type", "mode"] and m["mode"] == "hdr"

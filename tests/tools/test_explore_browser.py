@@ -127,6 +127,24 @@ def test_a_bad_value_shows_the_loaders_message(session):
                            ".textContent === ''")
 
 
+def test_a_fresnel_form_shows_the_controls_of_its_parameters(session):
+    _, page, _, errors = session
+    left = column(page, "left")
+    names = "Array.from(document.querySelectorAll('.column[data-side=left] .params " \
+            "input[type=text]')).map(e => e.dataset.name)"
+    assert not {"eta", "kappa", "int_ior", "f82_tint"} & set(page.evaluate(names))
+    left.locator("select[data-name=fresnel]").select_option("conductor")
+    page.wait_for_function(f"{names}.includes('kappa')")
+    shown = set(page.evaluate(names))
+    assert {"eta", "kappa"} <= shown and not {"int_ior", "f82_tint"} & shown
+    left.locator("select[data-name=fresnel]").select_option("schlick")
+    page.wait_for_function(f"!{names}.includes('kappa')")
+    assert not {"eta", "kappa"} & set(page.evaluate(names))
+    page.wait_for_function("document.querySelector('.column[data-side=left] .error')"
+                           ".textContent === ''")
+    assert errors == []
+
+
 def test_fit_moves_the_left_sliders_to_the_right_material(session):
     _, page, _, _ = session
     right = column(page, "right").locator("input[type=text][data-name=alpha]")

@@ -140,28 +140,66 @@ class Explorer:
     def __init__(self):
         self.variant = backend.setup()
         self.models: dict[str, dict] = {}
-        self.keys: dict[str, dict[str, str]] = {}      # model -> parameter -> traverse key
+        self.keys: dict[tuple, dict[str, str]] = {}    # configuration -> parameter -> key
         for model in backend.course_models() + builtin_models():
-            self.keys[model["name"]] = keys = self._probe(model)
+            keys = self._probe(model, {})
             for p in model["params"]:
                 p["control"] = p["name"] in keys or model["source"] == "mitsuba"
+            if model["source"] == "mi_brdfs":
+                self._when(model, keys)
             self.models[model["name"]] = model
         self.env = mi.Bitmap(preview.environment())
         self.entries: OrderedDict[tuple, Entry] = OrderedDict()
         self.walks: OrderedDict[tuple, list] = OrderedDict()
 
-    def _probe(self, model: dict) -> dict[str, str]:
-        """Which parameters the model exposes in ``mi.traverse``, under which
+    @staticmethod
+    def _options(model: dict, material: dict) -> dict:
+        """The options ``material`` (complete or partial) gives its model,
+        but ``mode``: with the model, the configuration whose parameters the
+        page controls."""
+        return {o["name"]: material[o["name"]] for o in model["options"]
+                if o["name"] != "mode" and o["name"] in material}
+
+    def _probe(self, model: dict, options: dict) -> dict[str, str] | None:
+        """Which parameters the configuration of ``model`` with ``options``
+        (the others at their defaults) exposes in ``mi.traverse``, under which
         key: a course plugin loaded with its defaults, a built-in with every
-        declared parameter given."""
+        declared parameter given; None if the plugin refuses the configuration.
+        Kept per configuration."""
+        config = (model["name"], *((o["name"], options.get(o["name"], o["default"]))
+                                   for o in model["options"] if o["name"] != "mode"))
+        if config in self.keys:
+            return self.keys[config]
         given = {} if model["source"] == "mi_brdfs" else {
             p["name"]: ([p["default"]] * 3 if p["kind"] == "spectrum" else p["default"])
             for p in model["params"]}
-        probe = backend.load(load_dict({model["name"]: model},
-                                       {"type": model["name"], "mode": "hdr", **given}))
+        try:
+            probe = backend.load(load_dict({model["name"]: model},
+                                           {"type": model["name"], "mode": "hdr", **options,
+                                            **given}))
+        except backend.MaterialError:
+            return None
         declared = {p["name"] for p in model["params"]}
         keys = {key.split(".")[0]: key for key in mi.traverse(probe).keys()}
-        return {name: key for name, key in keys.items() if name in declared}
+        self.keys[config] = keys = {name: key for name, key in keys.items() if name in declared}
+        return keys
+
+    def _when(self, model: dict, default_keys: dict[str, str]) -> None:
+        """``when`` of each parameter that a choice of an option exposes and
+        the defaults do not (``cook_torrance``'s ``eta`` and ``kappa`` with
+        ``fresnel="conductor"``): option -> the choices that expose it. The
+        page shows such a parameter's control while one of them is chosen."""
+        shown: dict[str, dict[str, list]] = {}
+        for o in model["options"]:
+            if o["type"] != "string" or o["name"] == "mode":
+                continue
+            for choice in o["choices"]:
+                keys = self._probe(model, {o["name"]: choice}) if choice != o["default"] else None
+                for name in (keys or {}).keys() - default_keys.keys():
+                    shown.setdefault(name, {}).setdefault(o["name"], []).append(choice)
+        for p in model["params"]:
+            if p["name"] in shown:
+                p["when"] = shown[p["name"]]
 
     def public_models(self) -> list[dict]:
         """The declarations as ``GET /api/models`` returns them."""
@@ -172,7 +210,8 @@ class Explorer:
         """The complete material and its loaded configuration, the values set
         (the plugin's checks: MaterialError, one line)."""
         material = complete(self.models, raw)
-        keys = self.keys[material["type"]]
+        model = self.models[material["type"]]
+        keys = self._probe(model, self._options(model, material)) or {}
         key = tuple((k, json_key(v)) for k, v in material.items() if k not in keys)
         entry = self.entries.get(key)
         if entry is None:

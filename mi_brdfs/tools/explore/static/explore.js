@@ -157,7 +157,7 @@ function setMaterial(column, material) {
   const model = page.models[material.type];
   const m = {type: model.name, mode: material.mode ?? "hdr"};
   for (const o of model.options) if (o.name !== "mode") m[o.name] = material[o.name] ?? o.default;
-  for (const p of model.params) if (p.control && !p.optional) m[p.name] = material[p.name] ?? p.default;
+  for (const p of model.params) if (controlled(p, m)) m[p.name] = material[p.name] ?? p.default;
   column.material = m;
   column.walk = null;
   const el = column.el;
@@ -167,6 +167,24 @@ function setMaterial(column, material) {
   buildOptions(column, model);
   buildParams(column, model);
   update(column);
+}
+
+// A parameter has a control while the configuration exposes it: with the
+// model's defaults (p.control), or with a choice of an option (p.when:
+// option -> the choices that expose it, e.g. cook_torrance's eta and kappa
+// with fresnel "conductor").
+function controlled(p, m) {
+  if (p.control && !p.optional) return true;
+  return Object.entries(p.when ?? {}).some(([option, choices]) => choices.includes(m[option]));
+}
+
+// Another choice of an option: the controls it exposes appear (their
+// defaults), the ones it no longer exposes go.
+function changeOption(column, name, value) {
+  const model = page.models[column.material.type];
+  const m = {...column.material, [name]: value};
+  for (const p of model.params) if (p.when && !controlled(p, m)) delete m[p.name];
+  setMaterial(column, m);
 }
 
 function row(container, label, doc, ...inputs) {
@@ -184,15 +202,15 @@ function buildOptions(column, model) {
     let input;
     if (o.type === "bool") {
       input = Object.assign(document.createElement("input"), {type: "checkbox", checked: column.material[o.name]});
-      input.onchange = () => change(column, o.name, input.checked);
+      input.onchange = () => changeOption(column, o.name, input.checked);
     } else if (o.type === "int") {
       input = Object.assign(document.createElement("input"), {type: "number", min: o.lo, max: o.hi, value: column.material[o.name]});
-      input.onchange = () => change(column, o.name, parseInt(input.value, 10));
+      input.onchange = () => changeOption(column, o.name, parseInt(input.value, 10));
     } else {
       input = document.createElement("select");
       for (const c of o.choices) input.add(new Option(c, c));
       input.value = column.material[o.name];
-      input.onchange = () => change(column, o.name, input.value);
+      input.onchange = () => changeOption(column, o.name, input.value);
     }
     input.dataset.name = o.name;
     row(box, o.name, o.doc, input, document.createElement("span"));

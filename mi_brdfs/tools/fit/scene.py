@@ -132,3 +132,84 @@ def sphere_mask(res: int) -> np.ndarray:
     d /= np.linalg.norm(d, axis=-1, keepdims=True)
     along = -DISTANCE * d[..., 2]                        # o·d with o = (0, 0, DISTANCE)
     return DISTANCE ** 2 - along ** 2 >= 1.0
+
+
+# ----------------------------------------------------------------------------
+#  Noise: the variance at equal samples
+# ----------------------------------------------------------------------------
+
+NOISE_CONFIDENCE = 0.90
+NOISE_BOOTSTRAP = 1000     # resamples of the pixels for the variance ratio's interval
+RELMSE_OFFSET = 0.01       # as relMSE's (measures.relmse): (ref + 0.01)² in the denominator
+
+
+def seed_views(make, res: int, spp: int, seeds) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Per view, the mean and the per-pixel sample variance (ddof 1) of
+    renders at each of ``seeds`` (each scene loaded once): (H, W, 3) each.
+    The views' sampler is ``independent`` and their filter a box
+    (:func:`..analysis.camera`), so the renders are independent and a pixel's
+    variance is its samples' variance over ``spp``."""
+    seeds = list(seeds)
+    if len(seeds) < 2:
+        raise ValueError(f"fit noise: seeds {seeds} is fewer than 2; a variance needs 2 or more")
+    out = {}
+    for view in VIEWS:
+        scene = mi.load_dict(scene_dict(make(), res, view), parallel=False)
+        images = np.stack([render(scene, spp, s) for s in seeds])
+        out[view] = (images.mean(axis=0), images.var(axis=0, ddof=1))
+        del scene, images
+        release()
+    return out
+
+
+_TARGET_NOISE: dict[tuple, dict] = {}
+
+
+def target_seed_views(target, res: int, spp: int, seeds) -> dict:
+    """:func:`seed_views` of a :class:`.targets.Target`, cached in this process."""
+    key = (target.spec, target.xml, res, spp, tuple(seeds))
+    if key not in _TARGET_NOISE:
+        make = (lambda: target.as_dict()) if target.xml is None else target.load
+        _TARGET_NOISE[key] = seed_views(make, res, spp, seeds)
+    return _TARGET_NOISE[key]
+
+
+def variance_ratio(model: dict, target: dict, reference: dict, mask: np.ndarray,
+                   boots: int = NOISE_BOOTSTRAP,
+                   confidence: float = NOISE_CONFIDENCE, rng_seed: int = 0
+                   ) -> tuple[float, float, float]:
+    """(ratio, low, high): the model's pixel variance over the target's at
+    equal samples, and its ``confidence`` interval (percentile bootstrap over
+    the sphere's pixels, the views' pixels resampled together).
+
+    ``model`` and ``target`` are :func:`seed_views` results. The variance is
+    relMSE's noise term: per pixel and channel var / (ref + 0.01)², summed
+    over the sphere's pixels (``mask``: True off the sphere,
+    :func:`sphere_mask`) of every view, with ``ref`` the target's render
+    ``reference`` (per view) for both. ``reference`` must be a render of its
+    own: weighed by the mean of its own renders, the target's variance reads
+    low (a pixel whose samples came out high has a larger variance and a
+    smaller weight; measured: a model against itself read 1.05-1.11). The expected relMSE of
+    a render against the converged image is bias² + that variance / spp, so
+    the ratio is the factor of samples the model needs to reach the target's
+    own noise. The views are pooled, not averaged: the noise of the set is
+    its sum, which the environment view, where ``sample`` matters, dominates."""
+    keep = ~mask
+    num, den = [], []
+    for view in VIEWS:
+        weight = 1.0 / (reference[view][keep] + RELMSE_OFFSET) ** 2
+        num.append((model[view][1][keep] * weight).sum(axis=-1))
+        den.append((target[view][1][keep] * weight).sum(axis=-1))
+    num, den = np.concatenate(num), np.concatenate(den)
+    if not den.sum() > 0:
+        return math.nan, math.nan, math.nan
+    ratio = float(num.sum() / den.sum())
+    rng = np.random.default_rng(rng_seed)
+    n = len(num)
+    ratios = np.empty(boots)
+    for b in range(boots):
+        pick = rng.integers(0, n, n)
+        ratios[b] = num[pick].sum() / max(den[pick].sum(), 1e-300)
+    tail = (1.0 - confidence) / 2 * 100
+    low, high = np.percentile(ratios, [tail, 100 - tail])
+    return ratio, float(low), float(high)

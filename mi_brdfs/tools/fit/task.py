@@ -126,7 +126,7 @@ def _fit_and_measure(target, model, settings: Settings, pairs) -> dict:
 NOISE_SEEDS = {"target": 1000, "model": 2000}   # the first seed of each one's noise renders
 
 
-def noise(target, properties: dict, settings: Settings, reference: dict) -> dict:
+def variance(target, properties: dict, settings: Settings, reference: dict) -> dict:
     """The fitted model's pixel variance over the target's at equal samples,
     with its 90 % interval (:func:`.scene.variance_ratio`), from
     ``noise_seeds`` renders of each per view at ``noise_spp``, weighed by
@@ -146,7 +146,7 @@ def noise(target, properties: dict, settings: Settings, reference: dict) -> dict
 def images(target, properties: dict, settings: Settings) -> dict:
     """The fitted model's renders against the target's in every view: FLIP
     and relMSE over the sphere's pixels per view, and their means; its pixel
-    variance over the target's (:func:`noise`)."""
+    variance over the target's (:func:`variance`)."""
     mask = scene.sphere_mask(settings.res)
     reference = scene.target_views(target, settings.res, settings.spp, seed=0)
     again = scene.target_views(target, settings.res, settings.spp, seed=1)
@@ -158,7 +158,7 @@ def images(target, properties: dict, settings: Settings) -> dict:
         views[view] = {"flip": m["flip"], "relmse": m["relmse"]}
         noise[view] = {"flip": n["flip"], "relmse": n["relmse"]}
     mean = lambda d, k: float(np.mean([v[k] for v in d.values()]))
-    return {**noise(target, properties, settings, reference),
+    return {**variance(target, properties, settings, reference),
             "image_flip": mean(views, "flip"), "image_relmse": mean(views, "relmse"),
             "image_noise_flip": mean(noise, "flip"), "image_noise_relmse": mean(noise, "relmse"),
             "image_views": views,

@@ -174,32 +174,35 @@ def target_seed_views(target, res: int, spp: int, seeds) -> dict:
     return _TARGET_NOISE[key]
 
 
-def variance_ratio(model: dict, target: dict, reference: dict, mask: np.ndarray,
-                   boots: int = NOISE_BOOTSTRAP,
+def variance_ratio(model: dict, target: dict, model_image: dict, target_image: dict,
+                   mask: np.ndarray, boots: int = NOISE_BOOTSTRAP,
                    confidence: float = NOISE_CONFIDENCE, rng_seed: int = 0
                    ) -> tuple[float, float, float]:
-    """(ratio, low, high): the model's pixel variance over the target's at
-    equal samples, and its ``confidence`` interval (percentile bootstrap over
-    the sphere's pixels, the views' pixels resampled together).
+    """(ratio, low, high): the model's relative pixel variance over the
+    target's at equal samples, and its ``confidence`` interval (percentile
+    bootstrap over the sphere's pixels, the views' pixels resampled together).
 
-    ``model`` and ``target`` are :func:`seed_views` results. The variance is
-    relMSE's noise term: per pixel and channel var / (ref + 0.01)², summed
-    over the sphere's pixels (``mask``: True off the sphere,
-    :func:`sphere_mask`) of every view, with ``ref`` the target's render
-    ``reference`` (per view) for both. ``reference`` must be a render of its
-    own: weighed by the mean of its own renders, the target's variance reads
-    low (a pixel whose samples came out high has a larger variance and a
-    smaller weight; measured: a model against itself read 1.05-1.11). The expected relMSE of
-    a render against the converged image is bias² + that variance / spp, so
-    the ratio is the factor of samples the model needs to reach the target's
-    own noise. The views are pooled, not averaged: the noise of the set is
-    its sum, which the environment view, where ``sample`` matters, dominates."""
+    ``model`` and ``target`` are :func:`seed_views` results. Each one's
+    variance is taken as relMSE's noise term against its own image: per pixel
+    and channel var / (image + 0.01)², summed over the sphere's pixels
+    (``mask``: True off the sphere, :func:`sphere_mask`) of every view, with
+    ``model_image`` and ``target_image`` renders of each (per view). The
+    expected relMSE of a render against its own converged image is that sum
+    over the pixels / spp, so the ratio is the factor of samples the model
+    needs to be as clean, relative to what it shows, as the target's render
+    (a darker model is not cleaner for being dark). The images must be
+    renders of their own: weighed by the mean of the noise renders
+    themselves, a variance reads low (a pixel whose samples came out high has
+    a larger variance and a smaller weight; measured: a model against itself
+    read 1.05-1.11). The views are pooled, not averaged: the noise of the set
+    is its sum, which the environment view, where ``sample`` matters,
+    dominates."""
     keep = ~mask
     num, den = [], []
     for view in VIEWS:
-        weight = 1.0 / (reference[view][keep] + RELMSE_OFFSET) ** 2
-        num.append((model[view][1][keep] * weight).sum(axis=-1))
-        den.append((target[view][1][keep] * weight).sum(axis=-1))
+        for out, noise, image in ((num, model, model_image), (den, target, target_image)):
+            weight = 1.0 / (image[view][keep] + RELMSE_OFFSET) ** 2
+            out.append((noise[view][1][keep] * weight).sum(axis=-1))
     num, den = np.concatenate(num), np.concatenate(den)
     if not den.sum() > 0:
         return math.nan, math.nan, math.nan

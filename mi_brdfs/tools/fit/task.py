@@ -126,18 +126,20 @@ def _fit_and_measure(target, model, settings: Settings, pairs) -> dict:
 NOISE_SEEDS = {"target": 1000, "model": 2000}   # the first seed of each one's noise renders
 
 
-def variance(target, properties: dict, settings: Settings, reference: dict) -> dict:
+def variance(target, properties: dict, settings: Settings, reference: dict,
+             image: dict) -> dict:
     """The fitted model's pixel variance over the target's at equal samples,
     with its 90 % interval (:func:`.scene.variance_ratio`), from
-    ``noise_seeds`` renders of each per view at ``noise_spp``, weighed by
-    ``reference`` (the target's renders at ``spp``, per view); the model's
+    ``noise_seeds`` renders of each per view at ``noise_spp``, each weighed by
+    its own render at ``spp`` (``reference`` the target's, ``image`` the
+    model's, per view); the model's
     seeds are not the target's, so a model that is the target reads about 1,
     not exactly 1."""
     seeds = lambda who: range(NOISE_SEEDS[who], NOISE_SEEDS[who] + settings.noise_seeds)
     own = scene.target_seed_views(target, settings.res, settings.noise_spp, seeds("target"))
     model = scene.seed_views(lambda: M.load_dict(properties), settings.res, settings.noise_spp,
                              seeds("model"))
-    ratio, low, high = scene.variance_ratio(model, own, reference,
+    ratio, low, high = scene.variance_ratio(model, own, image, reference,
                                             scene.sphere_mask(settings.res))
     return {"noise_ratio": ratio, "noise_low": low, "noise_high": high,
             "noise_seeds": settings.noise_seeds, "noise_spp": settings.noise_spp}
@@ -158,7 +160,7 @@ def images(target, properties: dict, settings: Settings) -> dict:
         views[view] = {"flip": m["flip"], "relmse": m["relmse"]}
         noise[view] = {"flip": n["flip"], "relmse": n["relmse"]}
     mean = lambda d, k: float(np.mean([v[k] for v in d.values()]))
-    return {**variance(target, properties, settings, reference),
+    return {**variance(target, properties, settings, reference, model),
             "image_flip": mean(views, "flip"), "image_relmse": mean(views, "relmse"),
             "image_noise_flip": mean(noise, "flip"), "image_noise_relmse": mean(noise, "relmse"),
             "image_views": views,

@@ -10,8 +10,9 @@ without renders the objective, then the BRDF error. FLIP runs from 0
 **Cost** (:func:`cost`): what a user waits for, the time to render the
 material as clean as its own plugin renders it, over the target's: the time
 per sample (``cost_ratio``, :mod:`.cost`) × the variance at equal samples
-(``noise_ratio``, :func:`.scene.variance_ratio`) — a model with twice the
-variance needs twice the samples for the same noise. Its 90 % interval
+(``noise_ratio``, :func:`.scene.variance_ratio`: each render's variance
+relative to its own image) — a model with twice the variance needs twice the
+samples for the same noise. Its 90 % interval
 (:func:`time_to_noise`) adds the two figures' log half-widths in quadrature
 (independent measurements, each interval about normal in the log). Records
 without the variance (fits made before it was measured) fall back on the

@@ -202,9 +202,10 @@ TO_NOISE = ("time to render the sphere as clean as the target renders it, over t
             "time per sample × variance at equal samples; the cost the ranking, the front and "
             "the verdict compare (time per sample alone where the variance was not measured)")
 PER_SAMPLE = "render time at equal samples over the target's, timed in turns (90 % interval)"
-VARIANCE = ("pixel variance at equal samples over the target's: relMSE's noise term over the "
-            "sphere's pixels of the views, from renders at several seeds (90 %: bootstrap over "
-            "the pixels); above 1 the model needs that many times the samples")
+VARIANCE = ("pixel variance at equal samples over the target's, each relative to its own image "
+            "(relMSE's noise term) over the sphere's pixels of the views, from renders at "
+            "several seeds (90 %: bootstrap over the pixels); above 1 the model needs that "
+            "many times the samples to be as clean")
 HEAD = ("<tr><th>#</th><th>model</th><th>FLIP</th><th>image relMSE</th>"
         f'<th title="{html.escape(BRDF_ERROR)}">BRDF error (L², black = 1)</th>'
         "<th>objective</th>"
@@ -323,9 +324,10 @@ itself at another seed; {rank.LOOKS_SAME} without renders); if none is, it says 
 Cost, in three columns: the <b>time per sample</b>, the model's render time over the target's,
 each in a process of its own, until the 90 % interval is within {s.cost_tolerance:.0%} or after
 {s.cost_rounds[1]} rounds (at least {s.cost_rounds[0]}); the <b>variance at equal samples</b>,
-the model's pixel variance over the target's (relMSE's noise term over the sphere's pixels of
-the views, from {s.noise_seeds} renders each at {s.noise_spp} spp; 90 % interval by a bootstrap
-over the pixels): a worse sampler needs that many times the samples; and their product, the
+the model's pixel variance over the target's, each relative to its own image (relMSE's noise
+term over the sphere's pixels of the views, from {s.noise_seeds} renders each at {s.noise_spp}
+spp; 90 % interval by a bootstrap over the pixels): a worse sampler needs that many times the
+samples; and their product, the
 <b>time to the same noise</b>, the cost the ranking, the front and the verdict compare (the
 time per sample where the records have no variance, as the verdict says). The verdict says
 when a timing interval did not close, and the load it was timed at; ops: Dr.Jit operations of

@@ -227,10 +227,16 @@ def closest_cheaper(order: list[dict]) -> dict | None:
     return min(cheap, key=lambda r: (quality(r),) + key(r)) if cheap else None
 
 
+def times(x: float) -> str:
+    """A ratio to two decimals, or to two significant digits below 0.1
+    (a time to noise can be a hundredth of the target's)."""
+    return f"{x:.2f}" if x >= 0.095 or x == 0 else f"{x:.2g}"
+
+
 def _interval_text(ratio: float, low, high) -> str:
-    text = f"{ratio:.2f}×"
+    text = f"{times(ratio)}×"
     if low is not None and high is not None:
-        text += f" ({low:.2f}–{high:.2f})"
+        text += f" ({times(low)}–{times(high)})"
     return text
 
 
@@ -295,7 +301,7 @@ def verdict(records: list[dict], plugin: str) -> str:
     what = cost_name(best)
     line = f"{best['model']}: FLIP {quality(best):.3f}, {cost_text(best)} the {what} of {plugin}"
     if time_to_noise(best) is not None:
-        line += (f" ({sample_text(best)} per sample, {best['noise_ratio']:.2f}× the variance "
+        line += (f" ({sample_text(best)} per sample, {times(best['noise_ratio'])}× the variance "
                  "at equal samples)")
     tol = tolerance_text(order)
     alt = cheaper_alternative(order)

@@ -161,13 +161,14 @@ def _noise(r: dict) -> str:
     """The pixel variance at equal samples over the target's (90 %)."""
     if r.get("noise_ratio") is None:
         return "–"
-    return f"{r['noise_ratio']:.2f} ({r['noise_low']:.2f}–{r['noise_high']:.2f})"
+    return "{} ({}–{})".format(*map(rank.times, (r["noise_ratio"], r["noise_low"],
+                                                 r["noise_high"])))
 
 
 def _to_noise(r: dict) -> str:
     """The time to the target's noise over the target's (90 %): the verdict's cost."""
     t = rank.time_to_noise(r)
-    return "–" if t is None else "{:.2f} ({:.2f}–{:.2f})".format(*t)
+    return "–" if t is None else "{} ({}–{})".format(*map(rank.times, t))
 
 
 def _row(r: dict, front: set, equals: dict) -> str:

@@ -20,9 +20,9 @@ time per sample, and the verdict says so (:func:`cost_name`).
 
 **Cost class** (:func:`cost_class`): the cost put on a total order in
 classes of :data:`COST_BAND`: class n holds the costs within a factor
-1.05^(n ± ½) of the target's own, so class 0 is "as costly as the target". Two models cost the
-same when their classes are equal and one is cheaper when its class is lower:
-an equivalence and a total order, so "cheaper" and "equal" are transitive
+1.05^(n ± ½) of the target's own, so class 0 is "as costly as the target".
+Two models cost the same when their classes are equal and one is cheaper
+when its class is lower: an equivalence and a total order, so "cheaper" and "equal" are transitive
 (overlapping intervals were not: a ≈ b and b ≈ c with a < c). 5 % is the
 precision the timing aims at (its 90 % interval's high/low ≤ 1.05) and about
 what a cost moves between two runs; two costs either side of a class's edge
@@ -56,8 +56,8 @@ front by the same argument as the first-ranked fit.
 
 **Verdict** (:func:`verdict`): the first-ranked fit with its cost (the time
 to the same noise, and the time per sample and the variance it is made of),
-the cheaper model that looks the same with the tolerance, or "no cheaper model looks the same" and
-the closest cheaper fit; then what the cost figures can bear
+the cheaper model that looks the same with the tolerance, or "no cheaper
+model looks the same" and the closest cheaper fit; then what the cost figures can bear
 (:func:`cost_caveat`): the load average they were timed at, whether it
 exceeded the cores, and which named fit's interval did not close; for
 records without the variance, that their costs are time per sample.
@@ -122,7 +122,7 @@ def cost(r: dict) -> float:
     if t is not None:
         return t[0]
     c = r.get("cost_ratio")
-    return c if _finite(c) and math.isfinite(c) else math.inf
+    return c if _finite(c) else math.inf
 
 
 def cost_interval(r: dict) -> tuple[float, float | None, float | None]:

@@ -146,7 +146,10 @@ def test_fitted_xml_loads_and_renders_with_the_reported_errors(tmp_path):
     assert {"metric", "objective", "cost_low", "cost_high", "ops_ratio"} <= set(rows[0])
     assert {r["metric"] for r in rows} == {"cosine"}
     html = (out / "index.html").read_text()
-    assert "__pareto.png" in html and "__slices.png" in html and "the cost of roughplastic" in html
+    assert "__pareto.png" in html and "__slices.png" in html
+    assert "the time to the same noise of roughplastic" in html
+    assert "<th" in html and "time per sample × (90 %)</th>" in html
+    assert {"noise_ratio", "noise_low", "noise_high", "time_to_noise"} <= set(rows[0])
     mask = scene.sphere_mask(TINY.res)
     reference = render_views(targets.parse([target])[0].as_dict(), TINY)
     for r in saved:
@@ -160,6 +163,10 @@ def test_fitted_xml_loads_and_renders_with_the_reported_errors(tmp_path):
         assert r["image_flip"] == pytest.approx(
             np.mean([v["flip"] for v in r["image_views"].values()]))
         assert r["cost_low"] <= r["cost_ratio"] <= r["cost_high"] and r["ops_ratio"] > 0
+        assert r["noise_low"] <= r["noise_ratio"] <= r["noise_high"]
+        ttn = r["time_to_noise"]                # time per sample × variance, interval around it
+        assert ttn[0] == pytest.approx(r["cost_ratio"] * r["noise_ratio"])
+        assert ttn[1] <= ttn[0] <= ttn[2]
         assert r["brdf_error"] >= 0 and r["image_flip"] >= 0 and r["seconds"] > 0
         del bsdf, images
 

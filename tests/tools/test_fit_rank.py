@@ -112,16 +112,18 @@ def test_the_verdict_names_a_cheaper_model_only_if_it_looks_the_same():
             fit("blinn_ct", 0.30, 0.85, 0.83, 0.87, image_noise_flip=0.02),
             fit("lambert", 0.70, 0.60, 0.58, 0.62, image_noise_flip=0.02)]
     line = rank.verdict(gold, "roughconductor")
-    assert line.startswith("ct: FLIP 0.050, 1.00× (0.98–1.02) the cost of roughconductor; "
+    assert line.startswith("ct: FLIP 0.050, 1.00× (0.98–1.02) the time per sample of roughconductor; "
                            "no cheaper model looks the same (within FLIP 0.020 of the best, "
                            "the target's seed noise): the closest cheaper one, blinn_ct, is at "
                            "FLIP 0.300")
+    assert line.endswith("The records have no pixel variance (made before it was measured): "
+                         "costs are time per sample, blind to a model's noisier sampling.")
     assert rank.cheaper_alternative(rank.ranked(gold)) is None
     plastic = gold + [fit("ggx_ct", 0.068, 0.80, 0.78, 0.82, image_noise_flip=0.02),
                       fit("phong", 0.071, 0.70, 0.68, 0.72, image_noise_flip=0.02)]
     assert rank.cheaper_alternative(rank.ranked(plastic))["model"] == "ggx_ct"   # 0.071 > 0.07
-    assert "ggx_ct looks the same at 0.80× (0.78–0.82) the cost: FLIP 0.068, within FLIP 0.020" \
-        in rank.verdict(plastic, "roughplastic")
+    assert "ggx_ct looks the same at 0.80× (0.78–0.82) the time per sample: FLIP 0.068, within " \
+        "FLIP 0.020" in rank.verdict(plastic, "roughplastic")
     alone = [fit("lambert", 0.0, 1.0, 0.98, 1.02)]
     assert "none costs less" in rank.verdict(alone, "diffuse")
     assert rank.tolerance(alone) == rank.LOOKS_SAME
@@ -131,12 +133,13 @@ def test_the_verdict_says_when_the_timing_did_not_close_or_the_machine_was_loade
     """An interval wider than 1.05 after the round cap, and a load average
     above the cores, are said in words with the load; a quiet, closed timing
     gets only its load."""
-    quiet = [fit("a", 0.05, 1.0, 0.98, 1.02, cost_load=0.4, cost_cores=2, cost_rounds=8),
-             fit("b", 0.30, 0.5, 0.49, 0.51, cost_load=0.6, cost_cores=2, cost_rounds=6)]
+    same = {"noise_ratio": 1.0, "noise_low": 1.0, "noise_high": 1.0}      # time per sample alone
+    quiet = [fit("a", 0.05, 1.0, 0.98, 1.02, cost_load=0.4, cost_cores=2, cost_rounds=8, **same),
+             fit("b", 0.30, 0.5, 0.49, 0.51, cost_load=0.6, cost_cores=2, cost_rounds=6, **same)]
     line = rank.verdict(quiet, "p")
     assert line.endswith(". Costs timed at load average 0.4–0.6 on 2 cores.")
-    loaded = [fit("a", 0.05, 1.0, 0.90, 1.12, cost_load=5.2, cost_cores=2, cost_rounds=40),
-              fit("b", 0.30, 0.5, 0.49, 0.51, cost_load=4.0, cost_cores=2, cost_rounds=6)]
+    loaded = [fit("a", 0.05, 1.0, 0.90, 1.12, cost_load=5.2, cost_cores=2, cost_rounds=40, **same),
+              fit("b", 0.30, 0.5, 0.49, 0.51, cost_load=4.0, cost_cores=2, cost_rounds=6, **same)]
     line = rank.verdict(loaded, "p")
     assert "load average 4.0–5.2 on 2 cores (the machine was loaded" in line
     assert "a's interval did not close (high/low 1.244 after 40 rounds, aim ≤ 1.05)" in line
@@ -205,3 +208,47 @@ def test_the_committed_trade_report_is_written_from_its_records(tmp_path):
         assert (tmp_path / name).read_text() == (COMMITTED / name).read_text(), (
             f"{name} is stale: python -m mi_brdfs.tools.fit.trade -o docs/benchmarks/trade "
             "--from-records")
+
+
+def noisy(model, flip, per_sample, variance, spread=1.03, **extra):
+    """A record with a time per sample and a variance, each with a 90 % interval."""
+    return fit(model, flip, per_sample, per_sample / spread, per_sample * spread,
+               noise_ratio=variance, noise_low=variance / 1.1, noise_high=variance * 1.1,
+               image_noise_flip=0.02, **extra)
+
+
+def test_the_time_to_noise_is_time_per_sample_times_variance_with_both_intervals():
+    """Its interval: the two log half-widths added in quadrature (worked by hand)."""
+    r = fit("a", 0.1, 1.0, 0.9, 1.2, noise_ratio=2.0, noise_low=1.6, noise_high=2.4)
+    ratio, low, high = rank.time_to_noise(r)
+    assert ratio == pytest.approx(2.0)
+    assert low == pytest.approx(2.0 * math.exp(-math.sqrt(math.log(1 / 0.9) ** 2
+                                                          + math.log(2 / 1.6) ** 2)))
+    assert high == pytest.approx(2.0 * math.exp(math.sqrt(math.log(1.2) ** 2
+                                                          + math.log(1.2) ** 2)))
+    assert rank.time_to_noise(fit("b", 0.1, 1.0, 0.9, 1.2)) is None      # an old record
+    assert rank.cost(fit("b", 0.1, 1.0, 0.9, 1.2)) == 1.0                # time per sample
+
+
+def test_the_verdict_compares_time_to_noise_where_time_per_sample_disagrees():
+    """'fast' renders a sample in 0.8× the target's time but with 3× its
+    variance (2.4× the time to the same noise); 'own' takes 1.0× per sample
+    at 1.0× the variance. They look the same (a FLIP tie): by time per sample
+    'fast' would be first, the front's only point and the cheaper model; by
+    time to noise 'own' is first, on the front with the ★, and 'fast' is
+    neither cheaper nor on the front. 'lean' (0.9× per sample, 0.8× the
+    variance: 0.72×) is the cheaper model that looks the same."""
+    rows = [noisy("fast", 0.051, 0.8, 3.0), noisy("own", 0.050, 1.0, 1.0)]
+    by_sample = [{k: v for k, v in r.items() if not k.startswith("noise")} for r in rows]
+    assert [r["model"] for r in rank.ranked(by_sample)] == ["fast", "own"]
+    assert [r["model"] for r in rank.ranked(rows)] == ["own", "fast"]
+    assert [r["model"] for r in rank.front(rows)] == ["own"]
+    assert rank.cheaper_alternative(rank.ranked(rows)) is None
+    line = rank.verdict(rows, "p")
+    assert line.startswith("own: FLIP 0.050, 1.00× (0.91–1.10) the time to the same noise of p "
+                           "(1.00× (0.97–1.03) per sample, 1.00× the variance at equal samples)")
+    assert "no cheaper model looks the same" in line and "pixel variance" not in line
+    lean = rows + [noisy("lean", 0.060, 0.9, 0.8)]
+    assert rank.cheaper_alternative(rank.ranked(lean))["model"] == "lean"
+    assert "lean looks the same at 0.72× (0.65–0.80) the time to the same noise" in \
+        rank.verdict(lean, "p")

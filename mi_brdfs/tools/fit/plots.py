@@ -20,37 +20,41 @@ def _figure(width, height):
 
 
 def pareto_plot(path: str, title: str, rows: list[dict]) -> None:
-    """FLIP against cost, each cost with its interval; the front
+    """FLIP against the verdict's cost (:func:`.rank.cost`: the time to the
+    same noise, else the time per sample), each with its interval; the front
     (:func:`.rank.front`) in red, numbered from the cheapest and listed beside
     the plot (labels never overlap); the first-ranked fit a star."""
     fig = _figure(8.4, 4.4)
     ax = fig.add_axes([0.08, 0.12, 0.55, 0.78])
     measured = [r for r in rows if r.get("cost_ratio") is not None]
+    x = {id(r): rank.cost(r) for r in measured}
     order = rank.front(measured)
     first = rank.ranked(rows)[0] if rank.ranked(rows) else None
     for r in measured:
-        c, q = r["cost_ratio"], max(rank.quality(r), 1e-4)
-        lo, hi = r.get("cost_low") or c, r.get("cost_high") or c
+        c, lo, hi = rank.cost_interval(r)
+        q = max(rank.quality(r), 1e-4)
+        lo, hi = lo or c, hi or c
         on = r in order
         colour = "C3" if on else "0.6"
         ax.errorbar([c], [q], xerr=[[c - lo], [min(hi, 10 * c) - c]], fmt="o", ms=5 if on else 3,
                     color=colour, ecolor=colour, elinewidth=1, capsize=2, zorder=3 if on else 2)
     if first is not None and first in measured:
-        ax.plot([first["cost_ratio"]], [max(rank.quality(first), 1e-4)], marker="*", ms=14,
+        ax.plot([x[id(first)]], [max(rank.quality(first), 1e-4)], marker="*", ms=14,
                 color="C3", markeredgecolor="black", zorder=4, ls="none")
     for i, r in enumerate(order, 1):
-        ax.annotate(str(i), (r["cost_ratio"], max(rank.quality(r), 1e-4)), fontsize=8,
+        ax.annotate(str(i), (x[id(r)], max(rank.quality(r), 1e-4)), fontsize=8,
                     xytext=(4, 4), textcoords="offset points", color="C3")
     if order:
-        ax.plot([r["cost_ratio"] for r in order], [max(rank.quality(r), 1e-4) for r in order],
+        ax.plot([x[id(r)] for r in order], [max(rank.quality(r), 1e-4) for r in order],
                 color="C3", lw=1, alpha=0.6)
     ax.set_yscale("log")
-    ax.set_xlabel("render cost / target's (90 % interval)")
+    name = rank.cost_name(measured[0]) if measured else "render cost"
+    ax.set_xlabel(f"{name} / target's (90 % interval)")
     ax.set_ylabel("image error (FLIP, mean of the views)")
     ax.set_title(title, fontsize=9)
     ax.grid(True, which="both", alpha=0.3)
     lines = [f"{i}{' ★' if r is first else '  '} {r['model']}\n     FLIP {rank.quality(r):.3f}, "
-             f"cost {r['cost_ratio']:.2f}×" for i, r in enumerate(order, 1)]
+             f"cost {x[id(r)]:.2f}×" for i, r in enumerate(order, 1)]
     fig.text(0.66, 0.9, f"Pareto front (equal cost: the same\n{rank.COST_BAND:.0%} cost class); "
              "★ first-ranked\n\n" + "\n".join(lines), fontsize=7, va="top", family="monospace")
     fig.savefig(path)

@@ -7,12 +7,22 @@ model's renders against the target's over the standard views (:mod:`.scene`);
 without renders the objective, then the BRDF error. FLIP runs from 0
 (identical) to 1 (the largest difference it measures).
 
-**Cost** (:func:`cost_class`): the render cost over the target's
-(``cost_ratio``, :mod:`.cost`), put on a total order in classes of
-:data:`COST_BAND`: class n holds the costs within a factor 1.05^(n ± ½) of the
-target's own, so class 0 is "as costly as the target". Two models cost the
-same when their classes are equal and one is cheaper when its class is lower:
-an equivalence and a total order, so "cheaper" and "equal" are transitive
+**Cost** (:func:`cost`): what a user waits for, the time to render the
+material as clean as its own plugin renders it, over the target's: the time
+per sample (``cost_ratio``, :mod:`.cost`) × the variance at equal samples
+(``noise_ratio``, :func:`.scene.variance_ratio`: each render's variance
+relative to its own image) — a model with twice the variance needs twice the
+samples for the same noise. Its 90 % interval
+(:func:`time_to_noise`) adds the two figures' log half-widths in quadrature
+(independent measurements, each interval about normal in the log). Records
+without the variance (fits made before it was measured) fall back on the
+time per sample, and the verdict says so (:func:`cost_name`).
+
+**Cost class** (:func:`cost_class`): the cost put on a total order in
+classes of :data:`COST_BAND`: class n holds the costs within a factor
+1.05^(n ± ½) of the target's own, so class 0 is "as costly as the target".
+Two models cost the same when their classes are equal and one is cheaper
+when its class is lower: an equivalence and a total order, so "cheaper" and "equal" are transitive
 (overlapping intervals were not: a ≈ b and b ≈ c with a < c). 5 % is the
 precision the timing aims at (its 90 % interval's high/low ≤ 1.05) and about
 what a cost moves between two runs; two costs either side of a class's edge
@@ -44,11 +54,13 @@ the fits in a lower cost class than the first-ranked one that look the same
 as the best, the first by :func:`key` (the cheapest, then the best). On the
 front by the same argument as the first-ranked fit.
 
-**Verdict** (:func:`verdict`): the first-ranked fit, the cheaper model that
-looks the same with the tolerance, or "no cheaper model looks the same" and
-the closest cheaper fit; then what the cost figures can bear
+**Verdict** (:func:`verdict`): the first-ranked fit with its cost (the time
+to the same noise, and the time per sample and the variance it is made of),
+the cheaper model that looks the same with the tolerance, or "no cheaper
+model looks the same" and the closest cheaper fit; then what the cost figures can bear
 (:func:`cost_caveat`): the load average they were timed at, whether it
-exceeded the cores, and which named fit's interval did not close.
+exceeded the cores, and which named fit's interval did not close; for
+records without the variance, that their costs are time per sample.
 """
 from __future__ import annotations
 
@@ -75,15 +87,54 @@ def quality(r: dict) -> float:
     return math.inf
 
 
-def _cost(r: dict) -> float:
+def _finite(v) -> bool:
+    return v is not None and math.isfinite(v) and v > 0
+
+
+def time_to_noise(r: dict) -> tuple[float, float, float] | None:
+    """(ratio, low, high): the time to the target's noise over the target's,
+    ``cost_ratio`` × ``noise_ratio``, with the 90 % interval of the two
+    combined (module docstring); None without both figures."""
+    c, v = r.get("cost_ratio"), r.get("noise_ratio")
+    if not (_finite(c) and _finite(v)):
+        return None
+    ratio = c * v
+    low = math.hypot(_half(c, r.get("cost_low")), _half(v, r.get("noise_low")))
+    high = math.hypot(_half(c, r.get("cost_high")), _half(v, r.get("noise_high")))
+    return ratio, ratio * math.exp(-low), ratio * math.exp(high)
+
+
+def _half(mid: float, end) -> float:
+    """An interval end's distance from its figure in the log; inf if unknown."""
+    return abs(math.log(end / mid)) if end is not None and 0 < end < math.inf else math.inf
+
+
+def cost_name(r: dict) -> str:
+    """What :func:`cost` reads for r: "time to the same noise", or "time per
+    sample" when the record has no variance."""
+    return "time to the same noise" if time_to_noise(r) is not None else "time per sample"
+
+
+def cost(r: dict) -> float:
+    """The cost the verdict compares: the time to the same noise, else the
+    time per sample (module docstring); inf when neither was measured."""
+    t = time_to_noise(r)
+    if t is not None:
+        return t[0]
     c = r.get("cost_ratio")
-    return c if c is not None and math.isfinite(c) and c > 0 else math.inf
+    return c if _finite(c) else math.inf
+
+
+def cost_interval(r: dict) -> tuple[float, float | None, float | None]:
+    """:func:`cost` with its 90 % interval (the ends None when unknown)."""
+    t = time_to_noise(r)
+    return t if t is not None else (cost(r), r.get("cost_low"), r.get("cost_high"))
 
 
 def cost_class(r: dict) -> float:
     """The fit's cost class (module docstring): round(log(cost) / log(1.05));
     inf when the cost was not measured."""
-    c = _cost(r)
+    c = cost(r)
     return math.inf if math.isinf(c) else float(round(math.log(c) / math.log(1.0 + COST_BAND)))
 
 
@@ -176,15 +227,32 @@ def closest_cheaper(order: list[dict]) -> dict | None:
     return min(cheap, key=lambda r: (quality(r),) + key(r)) if cheap else None
 
 
-def cost_text(r: dict) -> str:
-    """A fit's cost as the verdict and the README's table write it:
-    ``0.96× (0.93–0.99)``."""
+def times(x: float) -> str:
+    """A ratio to two decimals, or to two significant digits below 0.1
+    (a time to noise can be a hundredth of the target's)."""
+    return f"{x:.2f}" if x >= 0.095 or x == 0 else f"{x:.2g}"
+
+
+def _interval_text(ratio: float, low, high) -> str:
+    text = f"{times(ratio)}×"
+    if low is not None and high is not None:
+        text += f" ({times(low)}–{times(high)})"
+    return text
+
+
+def sample_text(r: dict) -> str:
+    """A fit's time per sample with its interval: ``0.96× (0.93–0.99)``."""
     if r.get("cost_ratio") is None:
         return "cost not measured"
-    text = f"{r['cost_ratio']:.2f}×"
-    if r.get("cost_low") is not None:
-        text += f" ({r['cost_low']:.2f}–{r['cost_high']:.2f})"
-    return text
+    return _interval_text(r["cost_ratio"], r.get("cost_low"), r.get("cost_high"))
+
+
+def cost_text(r: dict) -> str:
+    """A fit's :func:`cost` as the verdict and the README's table write it:
+    the time to the same noise with its interval, ``1.32× (1.20–1.45)``, else
+    the time per sample's."""
+    t = time_to_noise(r)
+    return sample_text(r) if t is None else _interval_text(*t)
 
 
 def closed(r: dict) -> bool:
@@ -230,14 +298,18 @@ def verdict(records: list[dict], plugin: str) -> str:
     best = order[0]
     if best.get("cost_ratio") is None:
         return f"{best['model']}: FLIP {quality(best):.3f} (render cost not measured)"
-    line = f"{best['model']}: FLIP {quality(best):.3f}, {cost_text(best)} the cost of {plugin}"
+    what = cost_name(best)
+    line = f"{best['model']}: FLIP {quality(best):.3f}, {cost_text(best)} the {what} of {plugin}"
+    if time_to_noise(best) is not None:
+        line += (f" ({sample_text(best)} per sample, {times(best['noise_ratio'])}× the variance "
+                 "at equal samples)")
     tol = tolerance_text(order)
     alt = cheaper_alternative(order)
     named = [best]
     if alt is not None:
         named.append(alt)
-        line += (f"; {alt['model']} looks the same at {cost_text(alt)} the cost: FLIP "
-                 f"{quality(alt):.3f}, within {tol}")
+        line += (f"; {alt['model']} looks the same at {cost_text(alt)} the {cost_name(alt)}: "
+                 f"FLIP {quality(alt):.3f}, within {tol}")
     else:
         closest = closest_cheaper(order)
         line += f"; no cheaper model looks the same (within {tol})"
@@ -247,4 +319,8 @@ def verdict(records: list[dict], plugin: str) -> str:
         else:
             line += ": none costs less"
     caveat = cost_caveat(order, named)
+    if what == "time per sample":
+        caveat = ("the records have no pixel variance (made before it was measured): costs are "
+                  "time per sample, blind to a model's noisier sampling"
+                  + (f"; {caveat}" if caveat else ""))
     return line + (f". {caveat[0].upper()}{caveat[1:]}." if caveat else "")

@@ -17,6 +17,12 @@
     ``target_albedo`` ([0°, 60°, 85°][R, G, B]), ``image_noise_flip`` and
     ``image_noise_relmse`` (the target against itself at another seed: the
     seed noise, the tolerance of "looks the same", :mod:`.rank`),
+    ``noise_ratio`` with ``noise_low`` and ``noise_high`` (the pixel variance
+    at equal samples over the target's, 90 %: :func:`.scene.variance_ratio`;
+    ``noise_seeds`` renders at ``noise_spp`` each), ``time_to_noise`` (the
+    time to the target's noise over the target's, [ratio, low, high]:
+    :func:`.rank.time_to_noise`, the cost the verdict compares; absent in
+    records made before the variance was measured),
     ``cost_rounds``, ``cost_closed`` (the interval reached the tolerance),
     ``cost_load`` and ``cost_cores`` (the machine's load average when it was
     timed, and its cores), ``ops``, ``reruns`` and ``worker`` (a task re-run
@@ -49,12 +55,13 @@ from .targets import slug
 FIELDS = ("target", "model", "plugin", "rank", "parameters", "image_flip", "image_relmse",
           "brdf_error", "metric", "objective", "objective_error", "cost_ratio", "cost_low",
           "cost_high", "ops_ratio", "seconds")
-EXTRA = ("image_views", "image_noise_flip", "image_noise_relmse", "effective", "albedo",
+EXTRA = ("image_views", "image_noise_flip", "image_noise_relmse", "noise_ratio", "noise_low",
+         "noise_high", "noise_seeds", "noise_spp", "time_to_noise", "effective", "albedo",
          "target_albedo", "cost_rounds", "cost_closed", "cost_load", "cost_cores", "ops",
          "reruns", "worker",
          "target_features", "xml", "renders", "start_errors", "error", "cost_error")
-CSV_EXTRA = ("effective", "image_noise_flip", "cost_rounds", "cost_load", "reruns", "xml",
-             "error")
+CSV_EXTRA = ("effective", "image_noise_flip", "noise_ratio", "noise_low", "noise_high",
+             "time_to_noise", "cost_rounds", "cost_load", "reruns", "xml", "error")
 TONEMAP = "aces"
 
 
@@ -90,6 +97,8 @@ def write(out: str, records: list[dict], settings, command: str, features: dict 
     for r in ordered:
         if "error" in r:
             continue
+        if rank.time_to_noise(r) is not None:
+            r["time_to_noise"] = list(rank.time_to_noise(r))
         stem = file_stem(r)
         r["xml"] = stem + ".xml"
         with open(os.path.join(out, r["xml"]), "w") as f:
@@ -142,9 +151,24 @@ def _albedo(a) -> str:
 
 
 def _cost(r: dict) -> str:
+    """The time per sample over the target's, with its 90 % interval."""
     if r.get("cost_ratio") is None:
         return "–" if "cost_error" not in r else f"failed: {html.escape(r['cost_error'])}"
     return f"{r['cost_ratio']:.2f} ({r['cost_low']:.2f}–{r['cost_high']:.2f})"
+
+
+def _noise(r: dict) -> str:
+    """The pixel variance at equal samples over the target's (90 %)."""
+    if r.get("noise_ratio") is None:
+        return "–"
+    return "{} ({}–{})".format(*map(rank.times, (r["noise_ratio"], r["noise_low"],
+                                                 r["noise_high"])))
+
+
+def _to_noise(r: dict) -> str:
+    """The time to the target's noise over the target's (90 %): the verdict's cost."""
+    t = rank.time_to_noise(r)
+    return "–" if t is None else "{} ({}–{})".format(*map(rank.times, t))
 
 
 def _row(r: dict, front: set, equals: dict) -> str:
@@ -161,7 +185,8 @@ def _row(r: dict, front: set, equals: dict) -> str:
     return (f"<tr><td>{r['rank']}</td><td>{html.escape(r['model'])}{mark}</td>"
             f"<td>{_fmt(r.get('image_flip'))}</td><td>{_fmt(r.get('image_relmse'))}</td>"
             f"<td>{_fmt(r['brdf_error'], '.4g')}</td><td>{_fmt(r.get('objective_error'), '.4g')}</td>"
-            f"<td>{_cost(r)}</td><td>{_fmt(r.get('ops_ratio'), '.2f')}</td>"
+            f"<td>{_to_noise(r)}</td><td>{_cost(r)}</td><td>{_noise(r)}</td>"
+            f"<td>{_fmt(r.get('ops_ratio'), '.2f')}</td>"
             f"<td>{_rgb(e.get('diffuse'))}</td><td>{_rgb(e.get('specular_0'))}<br>"
             f"{_rgb(e.get('specular_85'))}</td><td>{_albedo(r.get('albedo'))}</td>"
             f"<td>{_fmt(r['seconds'], '.1f')}</td><td class=p>{html.escape(params)}"
@@ -174,9 +199,21 @@ BRDF_ERROR = ("BRDF error: the L² distance of the fit's eval from the target's 
               "far as black. It is not bounded by 1: a lobe sharper or taller than the "
               "target's weighs in by its height squared while the image sees its integral, "
               "so a fit can be farther than black in L² and still look close")
+TO_NOISE = ("time to render the sphere as clean as the target renders it, over the target's: "
+            "time per sample × variance at equal samples; the cost the ranking, the front and "
+            "the verdict compare (time per sample alone where the variance was not measured)")
+PER_SAMPLE = "render time at equal samples over the target's, timed in turns (90 % interval)"
+VARIANCE = ("pixel variance at equal samples over the target's, each relative to its own image "
+            "(relMSE's noise term) over the sphere's pixels of the views, from renders at "
+            "several seeds (90 %: bootstrap over the pixels); above 1 the model needs that "
+            "many times the samples to be as clean")
 HEAD = ("<tr><th>#</th><th>model</th><th>FLIP</th><th>image relMSE</th>"
         f'<th title="{html.escape(BRDF_ERROR)}">BRDF error (L², black = 1)</th>'
-        "<th>objective</th><th>cost × (90 %)</th><th>ops ×</th><th>diffuse colour</th>"
+        "<th>objective</th>"
+        f'<th title="{html.escape(TO_NOISE)}">time to the same noise × (90 %)</th>'
+        f'<th title="{html.escape(PER_SAMPLE)}">time per sample × (90 %)</th>'
+        f'<th title="{html.escape(VARIANCE)}">variance at equal samples × (90 %)</th>'
+        "<th>ops ×</th><th>diffuse colour</th>"
         "<th>specular colour at 0° / 85°</th><th>albedo (max channel)</th><th>fit s</th>"
         "<th>parameters</th><th>XML</th></tr>")
 
@@ -206,7 +243,7 @@ def _section(out: str, name: str, rows: list[dict], found: dict | None) -> str:
         plots.pareto_plot(os.path.join(out, f"{name}__pareto.png"), rows[0]["target"], ok)
         parts.append(f'<img src="{name}__pareto.png" alt="Pareto plot">')
     body = [_row(r, front, equals) for r in ok]
-    body += [f"<tr><td></td><td>{html.escape(r['model'])}</td><td colspan=12>FAILED: "
+    body += [f"<tr><td></td><td>{html.escape(r['model'])}</td><td colspan=14>FAILED: "
              f"{html.escape(r['error'])}</td></tr>" for r in failed]
     parts.append(f"<table>{HEAD}{''.join(body)}</table>")
     if ok and ok[0].get("target_albedo"):
@@ -285,9 +322,17 @@ front, the ★ and the verdict use that one rule. The verdict's cheaper model is
 whose FLIP is within the tolerance of the best: the target's seed noise (the target against
 itself at another seed; {rank.LOOKS_SAME} without renders); if none is, it says so.
 {html.escape(BRDF_ERROR, quote=False)}.
-Render cost: the model's time over the target's, each in a process of its own, until the 90 % interval is within {s.cost_tolerance:.0%} or after
-{s.cost_rounds[1]} rounds (at least {s.cost_rounds[0]}); the verdict says when an interval did
-not close, and the load it was timed at; ops: Dr.Jit operations of a traced eval and sample
+Cost, in three columns: the <b>time per sample</b>, the model's render time over the target's,
+each in a process of its own, until the 90 % interval is within {s.cost_tolerance:.0%} or after
+{s.cost_rounds[1]} rounds (at least {s.cost_rounds[0]}); the <b>variance at equal samples</b>,
+the model's pixel variance over the target's, each relative to its own image (relMSE's noise
+term over the sphere's pixels of the views, from {s.noise_seeds} renders each at {s.noise_spp}
+spp; 90 % interval by a bootstrap over the pixels): a worse sampler needs that many times the
+samples; and their product, the
+<b>time to the same noise</b>, the cost the ranking, the front and the verdict compare (the
+time per sample where the records have no variance, as the verdict says). The verdict says
+when a timing interval did not close, and the load it was timed at; ops: Dr.Jit operations of
+a traced eval and sample
 over the target's. The documentation's fit guide explains each figure.</p>
 """
     return pages.page("mi-brdfs fit", about + _contents(list(contents)) + "".join(sections),

@@ -47,11 +47,13 @@ class Settings(SettingsBase):
     cost: bool = True                        # render cost (mi_brdfs.tools.fit.cost)
     cost_rounds: tuple[int, int] = (6, 40)   # cost: at least, at most this many rounds
     cost_tolerance: float = 0.05             # cost: until the 90 % interval's high/low <= 1.05
+    noise_seeds: int = 8                     # noise: renders at this many seeds per view
+    noise_spp: int = 4                       # noise: at this many samples per pixel each
 
 
 FULL = Settings()
 QUICK = Settings(viewers=(8, 4), uniform=(8, 8), lobe=16, res=48,
-                 spp=16, cost_rounds=(3, 6))
+                 spp=16, cost_rounds=(3, 6), noise_seeds=6)
 
 
 def slices(bsdf) -> list[list[list[float]]]:
@@ -107,7 +109,8 @@ def _fit_and_measure(target, model, settings: Settings, pairs) -> dict:
               "objective": settings.objective, "objective_error": fit["objective"],
               "image_relmse": None, "image_flip": None, "image_noise_relmse": None,
               "image_noise_flip": None, "cost_ratio": None, "cost_low": None,
-              "cost_high": None, "ops_ratio": None,
+              "cost_high": None, "ops_ratio": None, "noise_ratio": None,
+              "noise_low": None, "noise_high": None,
               "effective": effective.parameters(model.plugin, fit["parameters"]),
               "albedo": model_albedo, "target_albedo": target_albedo,
               "starts": fit["starts"], "worker": worker_name(),
@@ -120,9 +123,32 @@ def _fit_and_measure(target, model, settings: Settings, pairs) -> dict:
     return record
 
 
+NOISE_SEEDS = {"target": 1000, "model": 2000}   # the first seed of each one's noise renders
+
+
+def variance(target, properties: dict, settings: Settings, reference: dict,
+             image: dict) -> dict:
+    """The fitted model's pixel variance over the target's at equal samples,
+    with its 90 % interval (:func:`.scene.variance_ratio`), from
+    ``noise_seeds`` renders of each per view at ``noise_spp``, each weighed by
+    its own render at ``spp`` (``reference`` the target's, ``image`` the
+    model's, per view); the model's
+    seeds are not the target's, so a model that is the target reads about 1,
+    not exactly 1."""
+    seeds = lambda who: range(NOISE_SEEDS[who], NOISE_SEEDS[who] + settings.noise_seeds)
+    own = scene.target_seed_views(target, settings.res, settings.noise_spp, seeds("target"))
+    model = scene.seed_views(lambda: M.load_dict(properties), settings.res, settings.noise_spp,
+                             seeds("model"))
+    ratio, low, high = scene.variance_ratio(model, own, image, reference,
+                                            scene.sphere_mask(settings.res))
+    return {"noise_ratio": ratio, "noise_low": low, "noise_high": high,
+            "noise_seeds": settings.noise_seeds, "noise_spp": settings.noise_spp}
+
+
 def images(target, properties: dict, settings: Settings) -> dict:
     """The fitted model's renders against the target's in every view: FLIP
-    and relMSE over the sphere's pixels per view, and their means."""
+    and relMSE over the sphere's pixels per view, and their means; its pixel
+    variance over the target's (:func:`variance`)."""
     mask = scene.sphere_mask(settings.res)
     reference = scene.target_views(target, settings.res, settings.spp, seed=0)
     again = scene.target_views(target, settings.res, settings.spp, seed=1)
@@ -134,7 +160,8 @@ def images(target, properties: dict, settings: Settings) -> dict:
         views[view] = {"flip": m["flip"], "relmse": m["relmse"]}
         noise[view] = {"flip": n["flip"], "relmse": n["relmse"]}
     mean = lambda d, k: float(np.mean([v[k] for v in d.values()]))
-    return {"image_flip": mean(views, "flip"), "image_relmse": mean(views, "relmse"),
+    return {**variance(target, properties, settings, reference, model),
+            "image_flip": mean(views, "flip"), "image_relmse": mean(views, "relmse"),
             "image_noise_flip": mean(noise, "flip"), "image_noise_relmse": mean(noise, "relmse"),
             "image_views": views,
             "images": {"target": {v: a.astype(np.float32) for v, a in reference.items()},

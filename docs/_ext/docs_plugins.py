@@ -348,8 +348,11 @@ def page(cls, work: Path, srcdir: Path) -> str:
     lobe = DOCS / "validation" / f"lobe_{name}.png"
     if lobe.exists():
         parts += ["Lobes", "-----", "",
-                  "Polar plots of ``eval`` in the plane of incidence, both modes (from the "
-                  ":doc:`validation report </results/validation>`):", "",
+                  "Polar plots of ``eval`` in the plane of incidence (from the "
+                  ":doc:`validation report </results/validation>`): the radius is "
+                  "f·cos θ_o, per steradian in hdr mode and the lecture's value (no unit) "
+                  "in scan-line mode, both plots on one radial scale, one curve per "
+                  "viewer's angle θ_i:", "",
                   *_image(lobe, srcdir, f"{name} lobes"), ""]
     scene = ROOT / "scenes" / f"{name}.xml"
     if scene.exists():

@@ -270,7 +270,8 @@ def grid(figures: list[list[str]]) -> list[str]:
     site's style sheet): Mitsuba's plugin pages show their renders so."""
     lines = [".. container:: matpreview", ""]
     for f in figures:
-        lines += [("   .. figure::" + f[0][len(".. image::"):]), *("   " + x if x else x for x in f[1:])]
+        lines += ["   .. figure::" + f[0][len(".. image::"):],
+                  *("   " + x if x else x for x in f[1:])]
     return lines
 
 

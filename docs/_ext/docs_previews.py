@@ -56,9 +56,10 @@ class Render:
 
 def environment() -> np.ndarray:
     """The preview's environment, a latitude-longitude RGB image (radiance):
-    grey, brighter towards the zenith (0.6 to 1.0), the ground below the
-    horizon 0.25, and two soft white panels of radiance 6 up to the left
-    and right of the camera, which the glossy renders reflect."""
+    grey, brighter towards the zenith (0.2 at the horizon to 0.45), the
+    ground below the horizon 0.1, and two soft white panels of radiance 4
+    up to the left and right of the camera, which the glossy renders
+    reflect."""
     rows, cols = ENV_SIZE
     theta = (np.arange(rows) + 0.5) / rows * math.pi              # from the zenith
     phi = (np.arange(cols) + 0.5) / cols * 2.0 * math.pi
@@ -66,7 +67,8 @@ def environment() -> np.ndarray:
     up = np.cos(t)
     sky = np.where(up > 0, 0.2 + 0.25 * up, 0.1)
     image = np.repeat(sky[..., None], 3, axis=2)
-    for centre_phi, centre_theta in ((0.6 * math.pi, 0.3 * math.pi), (1.4 * math.pi, 0.35 * math.pi)):
+    panels = ((0.6 * math.pi, 0.3 * math.pi), (1.4 * math.pi, 0.35 * math.pi))   # (φ, θ)
+    for centre_phi, centre_theta in panels:
         d = ((p - centre_phi) / 0.35) ** 2 + ((t - centre_theta) / 0.2) ** 2
         image += 4.0 * np.exp(-d ** 4)[..., None]
     return image.astype(np.float32)
@@ -78,6 +80,7 @@ def scene(bsdf: dict, mode: str) -> dict:
     camera = mi.ScalarTransform4f().look_at(origin=[0, 1.6, 5.2], target=[0, -0.15, 0],
                                             up=[0, 1, 0])
     n = FLOOR["squares"]
+    squares = mi.ScalarTransform4f().scale([n / 2, n / 2, 1])     # of the floor's uv square
     return {
         "type": "scene",
         "integrator": {"type": "course", "mode": mode},
@@ -94,7 +97,7 @@ def scene(bsdf: dict, mode: str) -> dict:
                            "reflectance": {"type": "checkerboard",
                                            "color0": {"type": "rgb", "value": FLOOR["color0"]},
                                            "color1": {"type": "rgb", "value": FLOOR["color1"]},
-                                           "to_uv": mi.ScalarTransform4f().scale([n / 2, n / 2, 1])}}},
+                                           "to_uv": squares}}},
         "key": {"type": "directional", "direction": KEY_DIRECTION,
                 "irradiance": {"type": "rgb", "value": KEY[mode]}},
         "sky": {"type": "envmap", "bitmap": mi.Bitmap(environment() * ENV_SCALE[mode])},

@@ -281,6 +281,8 @@ def test_plugin_page_has_notes_links_lobes_and_scene(site, cls):
     page = read(site, f"plugins/{cls.name}.html")
     text = plain(page)
     assert "One-sided" in text and "depolarizer" in text and "Modes" in text
+    lobes = text.split("Lobes", 1)[1].split("Bundled scene", 1)[0]
+    assert "radial scale" in lobes and "θ_" not in lobes     # angles typeset, not raw
     for name in ALL[cls.name].mitsuba:
         assert f'plugins_bsdfs.html#bsdf-{name}"' in page, name
     for picture in (f"{cls.name}_scanline.png", f"{cls.name}_hdr.png", f"lobe_{cls.name}.png"):

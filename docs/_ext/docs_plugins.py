@@ -351,9 +351,9 @@ def page(cls, work: Path, srcdir: Path) -> str:
         parts += ["Lobes", "-----", "",
                   "Polar plots of ``eval`` in the plane of incidence (from the "
                   ":doc:`validation report </results/validation>`): the radius is "
-                  "f·cos θ_o, per steradian in hdr mode and the lecture's value (no unit) "
-                  "in scan-line mode, both plots on one radial scale, one curve per "
-                  "viewer's angle θ_i:", "",
+                  r":math:`f\cos\theta_o`, per steradian in hdr mode and the lecture's "
+                  "value (no unit) in scan-line mode, both plots on one radial scale, one "
+                  r"curve per viewer's angle :math:`\theta_i`:", "",
                   *_image(lobe, srcdir, f"{name} lobes"), ""]
     scene = ROOT / "scenes" / f"{name}.xml"
     if scene.exists():

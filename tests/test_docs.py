@@ -181,11 +181,108 @@ def test_plugin_page_renders_vary_its_main_parameter(site, cls):
         assert differ(images["scanline", values[0]], images["hdr", values[0]])
 
 
+def figures(site: str, page: str) -> list[dict]:
+    """The page's render figures (``div.matpreview``): each image's file in the
+    site, its alt text and its caption."""
+    html_ = read(site, page)
+    found = []
+    for grid in re.findall(r'<div class="matpreview[^"]*">(.*?)</div>', html_, re.S):
+        for fig in re.findall(r"<figure[^>]*>(.*?)</figure>", grid, re.S):
+            attrs = dict(re.findall(r'(\w+)="([^"]*)"', re.search(r"<img[^>]*>", fig).group(0)))
+            caption = re.search(r"<figcaption>(.*?)</figcaption>", fig, re.S)
+            found.append({"file": os.path.normpath(os.path.join(site, os.path.dirname(page),
+                                                                attrs["src"])),
+                          "alt": html.unescape(attrs.get("alt", "")),
+                          "caption": plain(caption.group(1)) if caption else ""})
+    return found
+
+
+@pytest.mark.parametrize("cls", PLUGINS, ids=lambda c: c.name)
+def test_plugin_renders_in_matpreview_style(site, cls):
+    """Every render of a plugin page is a captioned figure with alt text, its
+    image 256² pixels, the sphere on a floor under a neutral grey background
+    (not black: the top corners are grey, R = G = B, neither dark nor white)
+    and a checkered floor (the bottom rows alternate light and dark)."""
+    import mitsuba as mi
+    found = figures(site, f"plugins/{cls.name}.html")
+    assert len(found) >= 2 * len(ALL[cls.name].picture_sets()[0].values)
+    for f in found:
+        assert f["alt"].startswith(f"{cls.name}, ") and f["caption"], f
+        image = np.array(mi.Bitmap(f["file"]), dtype=np.float64)
+        assert image.shape[:2] == (256, 256), f
+        corners = np.concatenate([image[:8, :8].reshape(-1, 3), image[:8, -8:].reshape(-1, 3)])
+        grey = corners.mean(axis=0)
+        assert 25 < grey.mean() < 230 and np.ptp(grey) < 3, (f["alt"], grey)
+        floor = image[-20:].mean(axis=(0, 2))              # along the bottom rows
+        assert np.ptp(floor) > 25, (f["alt"], np.ptp(floor))
+
+
+def _conductor_fresnel(eta, kappa, theta):
+    """The unpolarised Fresnel reflectance of a conductor of complex index
+    n = η + iκ (from air) at the angle θ, by complex arithmetic (Snell's law
+    with a complex refracted cosine), independent of the plugin's real form."""
+    n = np.asarray(eta) + 1j * np.asarray(kappa)
+    c = np.cos(theta)
+    ct = np.sqrt(1 - (np.sin(theta) / n) ** 2)
+    rs = (c - n * ct) / (c + n * ct)
+    rp = (n * c - ct) / (n * c + ct)
+    return (abs(rs) ** 2 + abs(rp) ** 2) / 2
+
+
+def test_cook_torrance_gold_under_three_fresnel_forms(site):
+    """The cook_torrance page's gold: Schlick's (the lecture's, first), F82-tint
+    and the exact conductor's, side by side and captioned, with parameters
+    that are gold's exact reflectance (Mitsuba's Au as roughconductor reads
+    it) at 0° and at acos(1/7), worked here by complex arithmetic; the exact
+    conductor's sphere is paler (bluer) than Schlick's."""
+    import drjit as dr
+    import mitsuba as mi
+    page = "plugins/cook_torrance.html"
+    gold = [f for f in figures(site, page) if ", gold, " in f["alt"]]
+    assert [f["alt"].rsplit(" ", 1)[-1] for f in gold] == ["schlick", "f82", "conductor"]
+    assert "lecture" in gold[0]["caption"] and 'material="Au"' in gold[2]["caption"]
+    rows = table_rows(site, page)                           # the lecture's forms first
+    assert rows["fresnel"][2].startswith('F: "schlick" is the lecture')
+    assert rows["base"][2].startswith('the diffuse lobe: "lambert" is the lecture')
+    reference = mi.load_dict({"type": "roughconductor", "material": "Au"})
+    si = dr.zeros(mi.SurfaceInteraction3f)
+    eta, kappa = (np.array(reference.eval_attribute(p, si), dtype=np.float64).ravel()
+                  for p in ("eta", "k"))
+    normal = _conductor_fresnel(eta, kappa, 0.0)
+    grazing = _conductor_fresnel(eta, kappa, np.arccos(1 / 7))
+    f0 = normal.max()
+    colour = normal / f0
+    tint = np.minimum(grazing / (colour * (f0 + (1 - f0) * (6 / 7) ** 5)), 1.0)
+    triple = lambda v: "(" + ", ".join(f"{x:.3f}" for x in v) + ")"    # noqa: E731
+    text = text_of(site, page)
+    assert f"F(0°) = {triple(normal)}" in text and f"F(81.8°) = {triple(grazing)}" in text
+    assert f"f0 = {f0:.3f}, specular_reflectance = {triple(colour)}" in gold[0]["caption"]
+    assert f"f82_tint = {triple(tint)}" in gold[1]["caption"]
+    # the sphere's box: the exact conductor's blue rises towards grazing, Schlick's
+    # with one f0 keeps m_S's (3.6 levels of 255 more in the build of 4 Dec 2026)
+    schlick, _, exact = (np.array(mi.Bitmap(f["file"]), dtype=np.float64)[40:200, 60:200]
+                         for f in gold)
+    assert exact[..., 2].mean() - schlick[..., 2].mean() > 2.0
+
+
+def test_index_hero_shows_every_plugin(site):
+    """The index's hero image is the course scene: it holds a sphere of every
+    registered plugin, and its caption names each."""
+    import xml.etree.ElementTree as ET
+    scene = ET.parse(os.path.join(ROOT, "scenes", "course.xml"))
+    shown = {b.get("type") for b in scene.iter("bsdf")}
+    assert {cls.name for cls in PLUGINS} <= shown
+    caption = re.search(r"Back row:.*?front row:[^.]*\.", text_of(site, "index.html")).group(0)
+    assert all(cls.name in caption for cls in PLUGINS), caption
+
+
 @pytest.mark.parametrize("cls", PLUGINS, ids=lambda c: c.name)
 def test_plugin_page_has_notes_links_lobes_and_scene(site, cls):
     page = read(site, f"plugins/{cls.name}.html")
     text = plain(page)
     assert "One-sided" in text and "depolarizer" in text and "Modes" in text
+    lobes = text.split("Lobes", 1)[1].split("Bundled scene", 1)[0]
+    assert "radial scale" in lobes and "θ_" not in lobes     # angles typeset, not raw
     for name in ALL[cls.name].mitsuba:
         assert f'plugins_bsdfs.html#bsdf-{name}"' in page, name
     for picture in (f"{cls.name}_scanline.png", f"{cls.name}_hdr.png", f"lobe_{cls.name}.png"):

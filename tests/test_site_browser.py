@@ -85,6 +85,14 @@ WIDE_TABLES = """() => [...document.querySelectorAll('article table')].map(t => 
     return {wide: t.getBoundingClientRect().width > t.closest('article').clientWidth + 1,
             scrolls: scrolls};
 })"""
+# The renders of a plugin page (Mitsuba's matpreview style): each figure's
+# image (its pixels and its size on the page), alt text and caption.
+PREVIEWS = """() => [...document.querySelectorAll('div.matpreview figure')].map(f => {
+    const img = f.querySelector('img'), caption = f.querySelector('figcaption');
+    return {alt: img ? img.getAttribute('alt') : '', natural: img ? img.naturalWidth : 0,
+            shown: img ? img.getBoundingClientRect().width : 0,
+            caption: caption ? caption.innerText.trim() : ''};
+})"""
 ROLE = re.compile(r":(?:func|mod|class|meth|data|attr|obj|exc|doc|ref|math|term|py:\w+):`")
 TEX = re.compile(r"\\_|\\(?:frac|operatorname|mathrm|text|cdot|sqrt|begin)\{|\$\$|\\\(|\\\[")
 
@@ -119,6 +127,7 @@ def browsed(site, tmp_path_factory):
             page.evaluate("() => window.MathJax && MathJax.startup && MathJax.startup.promise")
             seen[name] = page.evaluate(MEASURE)
             seen[name]["tables"] = page.evaluate(WIDE_TABLES)
+            seen[name]["previews"] = page.evaluate(PREVIEWS)
             for shot, target in SCREENSHOTS.items():
                 if name == target:
                     page.screenshot(path=str(shots / f"{shot}.png"), full_page=True)
@@ -138,6 +147,26 @@ def test_every_image_is_there(browsed):
     seen, _, _ = browsed
     assert bad(seen, "missing") == {}
     assert len(seen["plugins/cook_torrance.html"]["text"]) > 1000
+
+
+@pytest.mark.parametrize("cls", PLUGINS, ids=lambda c: c.name)
+def test_plugin_renders_are_large_captioned_figures(browsed, cls):
+    """Every plugin page shows its renders as Mitsuba's pages do: captioned
+    figures with alt text, drawn at least 200 px wide at 1280 px (the 128²
+    renders of before were 128 px), from images of 256² pixels; the
+    cook_torrance page adds gold under the three Fresnel forms."""
+    seen, _, _ = browsed
+    figures = seen[f"plugins/{cls.name}.html"]["previews"]
+    assert len(figures) >= 6, figures                  # a sweep of 3 values, both modes
+    for f in figures:
+        assert f["alt"].startswith(cls.name + ",") and f["caption"], f
+        assert f["natural"] >= 256 and f["shown"] >= 200, f
+    gold = [f for f in figures if ", gold, " in f["alt"]]
+    if cls.name == "cook_torrance":
+        assert [f["alt"].rsplit(" ", 1)[-1] for f in gold] == ["schlick", "f82", "conductor"]
+        assert "lecture" in gold[0]["caption"] and "Au" in gold[2]["caption"]
+    else:
+        assert gold == []
 
 
 def test_no_page_is_wider_than_the_window(browsed):

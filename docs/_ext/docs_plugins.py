@@ -252,31 +252,75 @@ def renders_section(cls, work: Path, srcdir: Path) -> list[str]:
     lines = ["Renders", "-------", ""]
     for sweep in sweeps:
         lines += sweep_table(cls, sweep, work, srcdir)
+    if cls.name == "cook_torrance":
+        lines += gold_section(work, srcdir)
+    return lines
+
+
+MODE_NAMES = {"scanline": "scan-line mode", "hdr": "hdr mode"}
+
+
+def figure(path: Path, srcdir: Path, alt: str, caption: str) -> list[str]:
+    """A captioned figure of a render grid (:func:`grid`)."""
+    return [*(_image(path, srcdir, alt)), "", f"   {caption}", ""]
+
+
+def grid(figures: list[list[str]]) -> list[str]:
+    """Figures side by side, as many as the column holds (``matpreview`` in the
+    site's style sheet): Mitsuba's plugin pages show their renders so."""
+    lines = [".. container:: matpreview", ""]
+    for f in figures:
+        lines += ["   .. figure::" + f[0][len(".. image::"):],
+                  *("   " + x if x else x for x in f[1:])]
     return lines
 
 
 def sweep_table(cls, pictures, work: Path, srcdir: Path) -> list[str]:
-    """One sweep's renders: its caption, then a row per mode."""
+    """One sweep's renders: its caption, then a captioned grid per mode."""
     from mi_brdfs.bsdfs.cases import label
     made = docs_previews.renders(cls, work / "previews", pictures)
     values = list(pictures.values)
     rest = label(pictures.config) if pictures.config else "defaults"
     lines = [f"``{pictures.parameter}`` from {values[0]:g} to {values[-1]:g}, the other "
-             f"parameters: {rest}. Rendered by this site's build "
-             f"({docs_previews.RES}² pixels): in scan-line mode (top row) "
-             f"{docs_previews.LIGHTS['scanline']}; in hdr mode (bottom row) "
-             f"{docs_previews.LIGHTS['hdr']}.", "",
-             ".. list-table::", "   :class: renders", "   :header-rows: 1",
-             "   :stub-columns: 1", "",
-             "   * - mode"]
-    lines += [f"     - ``{pictures.parameter}`` = {v:g}" for v in values]
-    for mode in ("scanline", "hdr"):
-        lines.append(f"   * - {mode}")
-        for r in (r for r in made if r.mode == mode):
-            image = _image(r.path, srcdir, f"{cls.name}, {mode}, {pictures.parameter} = "
-                           f"{r.value:g}")
-            lines += ["     - " + image[0], *("       " + line for line in image[1:])]
-    return lines + [""]
+             f"parameters: {rest}: {docs_previews.SCENE}, {docs_previews.RES}² pixels.", ""]
+    for mode in ("hdr", "scanline"):
+        lines += [f"**{MODE_NAMES[mode].capitalize()}**: {docs_previews.LIGHTS[mode]}.", ""]
+        lines += grid([figure(r.path, srcdir, f"{cls.name}, {mode}, {pictures.parameter} = "
+                              f"{r.value:g}", f"``{pictures.parameter}`` = {r.value:g}, "
+                              f"{MODE_NAMES[mode]}")
+                       for r in made if r.mode == mode])
+    return lines
+
+
+def gold_section(work: Path, srcdir: Path) -> list[str]:
+    """cook_torrance: gold under Schlick's F (the lecture's), F82-tint and the
+    exact conductor's, side by side, with how their parameters were made."""
+    g = docs_previews.gold()
+    made = docs_previews.gold_renders(work / "previews")
+    triple = lambda v: "(" + ", ".join(f"{x:.3f}" for x in v) + ")"      # noqa: E731
+    raised = [c for c, r in zip("RGB", g.raised) if r]
+    captions = {
+        "schlick": f'``fresnel="schlick"`` (the lecture\'s): ``f0`` = {g.f0:.3f}, '
+                   f"``specular_reflectance`` = {triple(g.colour)}",
+        "f82": f'``fresnel="f82"``: the same, ``f82_tint`` = {triple(g.tint)}',
+        "conductor": '``fresnel="conductor"``, ``material="Au"``'}
+    text = [
+        "Gold, three Fresnel forms", "^^^^^^^^^^^^^^^^^^^^^^^^^", "",
+        f"The same gold sphere (GGX, Smith G, α = {docs_previews.GOLD_ROUGHNESS['alpha']:g}, "
+        f"``k`` = 0, hdr mode) under the lecture's Schlick F, Hoffman's F82-tint and the "
+        f"exact conductor's F with Mitsuba's ``Au`` data. The parameters of the first two "
+        f"are computed by this site's build from the exact conductor Fresnel of gold's "
+        f"index (the RGB colour ``roughconductor`` makes of Mitsuba's ``Au`` data): "
+        f"F(0°) = {triple(g.normal)} and F(81.8°) = {triple(g.f82)} (81.8° = acos 1/7, "
+        f"where F82-tint sets its value). ``f0`` is one number here, so, as a user would, "
+        f"``f0`` is the largest channel of F(0°) and ``specular_reflectance`` the rest "
+        f"(their product is F(0°)); ``f82_tint`` is F(81.8°) over that Schlick curve "
+        f"there" + (f", held at 1 in {' and '.join(raised)}: gold reflects more there than "
+                   f"Schlick's curve of one ``f0``, and F82-tint can only lower it"
+                   if raised else "") + ". Schlick's colour stays gold's at grazing "
+        f"angles; the exact conductor's turns paler.", ""]
+    return text + grid([figure(r.path, srcdir, f"cook_torrance, gold, fresnel = {r.label}",
+                               captions[r.label]) for r in made])
 
 
 def mitsuba_section(cls) -> list[str]:
@@ -305,8 +349,11 @@ def page(cls, work: Path, srcdir: Path) -> str:
     lobe = DOCS / "validation" / f"lobe_{name}.png"
     if lobe.exists():
         parts += ["Lobes", "-----", "",
-                  "Polar plots of ``eval`` in the plane of incidence, both modes (from the "
-                  ":doc:`validation report </results/validation>`):", "",
+                  "Polar plots of ``eval`` in the plane of incidence (from the "
+                  ":doc:`validation report </results/validation>`): the radius is "
+                  r":math:`f\cos\theta_o`, per steradian in hdr mode and the lecture's "
+                  "value (no unit) in scan-line mode, both plots on one radial scale, one "
+                  r"curve per viewer's angle :math:`\theta_i`:", "",
                   *_image(lobe, srcdir, f"{name} lobes"), ""]
     scene = ROOT / "scenes" / f"{name}.xml"
     if scene.exists():

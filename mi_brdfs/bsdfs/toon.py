@@ -428,7 +428,10 @@ class Toon(BRDF):
                    ("toon with ramps", {**t, "diffuse_ramp": ramp([[0.1] * 3, [0.1] * 3,
                                                                         [0.4] * 3, [0.8] * 3]),
                                         "specular_ramp": ramp([[0.0] * 3] * 7 + [[1.0] * 3])})],
-            pictures=Pictures("specular_threshold", (0.5, 0.8, 0.95)),
+            # a lit colour of the course scene's: the white highlight shows on it
+            pictures=Pictures("specular_threshold", (0.5, 0.8, 0.95),
+                              {"diffuse_reflectance": [0.3, 0.7, 0.9],
+                               "diffuse_shade": [0.08, 0.2, 0.35]}),
             fits=[{"diffuse_reflectance": [0.8, 0.5, 0.3], "diffuse_shade": [0.2, 0.1, 0.1],
                    "diffuse_threshold": 0.4, "specular_reflectance": [0.9, 0.9, 0.8],
                    "specular_shade": [0.05, 0.05, 0.1], "specular_threshold": 0.85,

@@ -279,6 +279,34 @@ def test_polar_lobe_tick_labels_do_not_collide():
                     assert not a.overlaps(b), [t.get_text() for t in axis.get_ticklabels()]
 
 
+@pytest.mark.parametrize("name", ["lambert", "cook_torrance"])
+def test_lobe_figure_names_its_radius_with_a_legend_and_one_scale(name):
+    """The lobe plot of the report and of the plugin pages (issue 38): each
+    plot says what its radius is, with its unit; each has its legend of the
+    viewer's angles; both share one radial scale, which holds every curve,
+    so that the reader compares their sizes (Lambert's hdr lobe is 1/π of its
+    scan-line one: its radius must look so)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    fig = sections.lobe_figure(name, cases.lobe_configs()[name], angles=(0, 60))
+    FigureCanvasAgg(fig).draw()
+    axes = fig.axes
+    assert len(axes) == 2
+    titles = [ax.get_title() for ax in axes]
+    assert "(1/sr)" in titles[0] and "hdr" in titles[0], titles
+    assert "no unit" in titles[1] and "scanline" in titles[1], titles
+    for ax in axes:
+        legend = ax.get_legend()
+        assert legend is not None, ax.get_title()
+        assert [t.get_text() for t in legend.get_texts()] == [r"$\theta_i$ = 0°",
+                                                              r"$\theta_i$ = 60°"]
+        assert max(max(line.get_ydata()) for line in ax.get_lines()) <= ax.get_rmax()
+    assert axes[0].get_rmax() == axes[1].get_rmax()
+    assert "one radial scale" in fig.get_suptitle()
+    if name == "lambert":                 # the scan-line lobe π times the hdr one
+        peaks = [max(max(line.get_ydata()) for line in ax.get_lines()) for ax in axes]
+        assert peaks[1] / peaks[0] == pytest.approx(np.pi, rel=1e-3)
+
+
 @pytest.mark.slow
 def test_the_full_reports_chi2_passes_and_rejects_its_negative_controls():
     """The χ² part of the full report (not its renders): every test of the

@@ -372,23 +372,38 @@ def negative_section(size: Settings, negatives: dict, count: int) -> list[dict]:
 # (per steradian), the lecture's shading value in scan-line mode (no 1/π).
 LOBE_RADIUS = {"hdr": r"radius: $f\,\cos\theta_o$ (1/sr)",
                "scanline": r"radius: $f\,\cos\theta_o$ (the lecture's value, no unit)"}
+LOBE_SCALE = "one radial scale in both plots"
+
+
+def lobe_figure(name: str, base: dict, angles=(0, 30, 60, 80)):
+    """The lobe plot of one configuration: ``eval`` in the plane of incidence,
+    scan-line mode beside hdr mode, each titled with what its radius is and
+    its unit, each with its legend, both on one radial scale (the reader
+    compares their sizes)."""
+    from matplotlib.figure import Figure    # the reports extra; no pyplot: no global backend
+
+    fig = Figure(figsize=(8.4, 3.4), dpi=100)
+    axes = fig.subplots(1, 2, subplot_kw={"projection": "polar"})
+    for ax, mode in zip(axes, MODES):
+        # the radius named under the title (a polar axis has no y label)
+        analysis.polar_lobes(ax, mi.load_dict({**base, "mode": mode}), angles,
+                             f"{mode} mode\n{LOBE_RADIUS[mode]}")
+    top = max(ax.get_rmax() for ax in axes)
+    for ax in axes:
+        ax.set_rmax(top)
+        ax.set_title(ax.get_title(), fontsize=10, y=0.86)     # near the half disc
+        ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, 0.17), ncol=len(angles),
+                  title="viewer", title_fontsize=7, handlelength=1.2, columnspacing=0.8)
+    fig.suptitle(f"{name}: {LOBE_SCALE}", fontsize=10, y=0.99, va="top")
+    fig.subplots_adjust(left=0.02, right=0.98, bottom=0.0, top=0.9, wspace=0.15)
+    return fig
 
 
 def lobe_section(out: str, models: dict, angles=(0, 30, 60, 80)) -> list[dict]:
-    from matplotlib.figure import Figure    # the reports extra; no pyplot: no global backend
-
     rows = []
     for name, base in models.items():
-        fig = Figure(figsize=(8.4, 3.0), dpi=100)
-        axes = fig.subplots(1, 2, subplot_kw={"projection": "polar"})
-        for ax, mode in zip(axes, MODES):
-            # the radius named under the title (a polar axis has no y label)
-            analysis.polar_lobes(ax, mi.load_dict({**base, "mode": mode}), angles,
-                                 f"{name} ({mode})\n{LOBE_RADIUS[mode]}")
-        axes[1].legend(fontsize=8, loc="center left", bbox_to_anchor=(1.02, 0.5),
-                       title="viewer\n(both plots)", title_fontsize=8)
-        fig.subplots_adjust(left=0.02, right=0.84, bottom=0.02, top=0.88, wspace=0.12)
         file = f"lobe_{name}.png"
-        fig.savefig(os.path.join(out, file), bbox_inches="tight", pad_inches=0.1)
+        lobe_figure(name, base, angles).savefig(os.path.join(out, file), bbox_inches="tight",
+                                                pad_inches=0.1)
         rows.append({"model": name, "plot": file})
     return rows

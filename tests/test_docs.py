@@ -542,3 +542,30 @@ def test_energy_guide_reads_as_a_guide(site):
     text = prose(page)
     assert re.findall(r"\btest_\w+", text) == [] and E_NOTATION.findall(text) == []
     assert "this 2-core machine" not in text
+
+
+def test_explore_page_latencies_are_the_committed_run():
+    """The explorer guide's table of what the page sees: its quiet columns are
+    the committed run's rows ``page: ...`` (every request of a change
+    together, in Chromium), with the load average the bench recorded, and the
+    guide says which goals they meet."""
+    rows = {r["measure"]: r for r in committed("benchmarks", "results.json")["groups"]["explore"]}
+    with open(os.path.join(DOCS, "guide", "explore.md"), encoding="utf-8") as f:
+        guide = f.read()
+    table = {line.split("|")[1].strip(): [c.strip() for c in line.split("|")[2:-1]]
+             for line in guide.split("### What the page sees", 1)[1].split("###", 1)[0]
+             .splitlines() if line.startswith("| the ") or line.startswith("| every")}
+    views = {"the lobe in the plane of incidence and the albedo": "plots",
+             "the 3-D lobe": "3-D lobe", "the first pass of the 128² render": "first pass",
+             "the random walk (after the release)": "walk",
+             "every request of the change": "all"}
+    cell = lambda r: f"{r['median_ms']:.0f} ({r['max_ms']:.0f})"             # noqa: E731
+    for label, view in views.items():
+        assert table[label][0] == cell(rows[f"page: change -> {view}"]), label
+        drag = rows.get(f"page: drag -> {view}")
+        assert table[label][1] == (cell(drag) if drag else ""), label
+    assert f"load average {rows['page: drag -> plots']['load']} when it started" in guide
+    drag, first = rows["page: drag -> plots"], rows["page: change -> first pass"]
+    met = drag["median_ms"] <= 100 and first["median_ms"] <= 250
+    assert ("Quiet, the page meets\nboth" in guide) == met
+    assert f"follow a drag in {drag['median_ms']:.0f} ms" in guide

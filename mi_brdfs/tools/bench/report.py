@@ -426,8 +426,9 @@ def markdown(results: dict, about: dict[str, str], images: str = "") -> str:
     if len(runs) == 1:
         lines += [run_line(runs[0]), ""]
     else:
-        lines += [f"The groups come from {len(runs)} runs (a partial run, `bench --only`, "
-                  "replaces its groups and keeps the others):", "",
+        lines += [f"The groups come from {len(runs)} runs, {results['seconds']:.0f} s in all "
+                  "(a partial run, `bench --only`, replaces its groups and keeps the others):",
+                  "",
                   *(f"- {run_line(run)}" for run in runs), ""]
     present = [g for g, rows in results["groups"].items() if rows]
     smoke = [g for g in present if g in smoke_groups(with_runs(results))]

@@ -539,9 +539,39 @@ def test_energy_guide_reads_as_a_guide(site):
     10⁻³⁹), no "this machine" in the energy guide's prose."""
     page = read(site, "guide/energy.html")
     assert all(f"groundtruth_{name}.png" in page for name in ("ggx_smith", "slices"))
+    # every D × G against the walk, the residual map, and each compensated
+    # model's furnace plot with and without compensation (the validation
+    # report's rows say which plot is whose)
+    assert all(f"groundtruth_{d}_{g}.png" in page for d in ("ggx", "beckmann", "blinn")
+               for g in ("smith", "cook_torrance"))
+    assert "groundtruth_residuals.png" in page
+    report = committed("validation", "results.json")
+    shown = set(re.findall(r"furnace_\w+?_\d+\.png", page))
+    compensated = {r["plot"]: r["model"] for r in report["furnace"] if r["compensated"]}
+    assert shown <= set(compensated)
+    assert {compensated[p] for p in shown} == {
+        cls.name for cls in PLUGINS if cls.compensable}
     text = prose(page)
     assert re.findall(r"\btest_\w+", text) == [] and E_NOTATION.findall(text) == []
     assert "this 2-core machine" not in text
+
+
+def test_plot_labels_typeset_angles():
+    """Every matplotlib label, title and legend entry in the package writes an
+    angle's subscript in mathtext ($\\theta_i$), never raw ("θ_i" printed as
+    typed was on the validation report's furnace plots)."""
+    drawn = re.compile(r"(set_xlabel|set_ylabel|set_title|suptitle|label=|\.text\()")
+    raw = []
+    for folder, _, files in os.walk(os.path.join(ROOT, "mi_brdfs")):
+        for name in files:
+            if name.endswith(".py"):
+                path = os.path.join(folder, name)
+                with open(path, encoding="utf-8") as f:
+                    for n, line in enumerate(f, 1):
+                        code = line.split("#", 1)[0]
+                        if drawn.search(code) and re.search(r"[θφ]_\w", code):
+                            raw.append(f"{os.path.relpath(path, ROOT)}:{n}: {line.strip()}")
+    assert raw == []
 
 
 def test_explore_page_latencies_are_the_committed_run():

@@ -574,6 +574,22 @@ def test_plot_labels_typeset_angles():
     assert raw == []
 
 
+def test_screenshots_beside_the_guides_that_show_them(site):
+    """The site's screenshots (docs/screenshots.py) and the explorer's (at rest
+    and mid-drag) are committed beside the guide that shows them, PNGs of the
+    1280 px window, each under 400 KB; the pages show them."""
+    from PIL import Image
+    shown = {"guide/site.html": ("guide/site", ("plugin", "energy", "trade")),
+             "guide/explore.html": ("guide/explore", ("page", "drag"))}
+    for page, (folder, names) in shown.items():
+        html_text = read(site, page)
+        for name in names:
+            path = os.path.join(DOCS, folder, f"{name}.png")
+            assert os.path.getsize(path) < 400_000, path
+            assert Image.open(path).size[0] == 1280, path
+            assert re.search(rf'<img[^>]+src="[^"]*/{name}\.png"', html_text), (page, name)
+
+
 def test_explore_page_latencies_are_the_committed_run():
     """The explorer guide's table of what the page sees: its quiet columns are
     the committed run's rows ``page: ...`` (every request of a change

@@ -205,7 +205,8 @@ def _section(out: str, name: str, rows: list[dict], found: dict | None) -> str:
     equals = {r["model"]: [o["model"] for o in ok if o is not r and o["model"] in front
                            and rank.equal_cost(r, o)] for r in ok if r["model"] in front}
     if any(r.get("cost_ratio") is not None for r in ok):
-        plots.pareto_plot(os.path.join(out, f"{name}__pareto.png"), rows[0]["target"], ok)
+        plots.pareto_plot(os.path.join(out, f"{name}__pareto.png"), label(rows[0]["target"]),
+                          ok)
         parts.append(f'<img src="{name}__pareto.png" alt="Pareto plot">')
     body = [_row(r, front, equals) for r in ok]
     body += [f"<tr><td></td><td>{html.escape(r['model'])}</td><td colspan=12>FAILED: "

@@ -1,4 +1,5 @@
-"""The speed/accuracy benchmark: ``mi-brdfs bench [--quick] [--only GROUP] [--merge REPORT] -o OUT_DIR``.
+"""The speed/accuracy benchmark:
+``mi-brdfs bench [--quick] [--only GROUP] [--merge REPORT] -o OUT_DIR``.
 
 Timings are medians of repeated renders after a warm-up render, all in one
 process so that ratios are meaningful on a noisy machine — except where the

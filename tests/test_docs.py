@@ -636,6 +636,79 @@ def test_energy_guide_reads_as_a_guide(site):
     10⁻³⁹), no "this machine" in the energy guide's prose."""
     page = read(site, "guide/energy.html")
     assert all(f"groundtruth_{name}.png" in page for name in ("ggx_smith", "slices"))
+    # every D × G against the walk, the residual map, and each compensated
+    # model's furnace plot with and without compensation (the validation
+    # report's rows say which plot is whose)
+    assert all(f"groundtruth_{d}_{g}.png" in page for d in ("ggx", "beckmann", "blinn")
+               for g in ("smith", "cook_torrance"))
+    assert "groundtruth_residuals.png" in page
+    report = committed("validation", "results.json")
+    shown = set(re.findall(r"furnace_\w+?_\d+\.png", page))
+    compensated = {r["plot"]: r["model"] for r in report["furnace"] if r["compensated"]}
+    assert shown <= set(compensated)
+    assert {compensated[p] for p in shown} == {
+        cls.name for cls in PLUGINS if cls.compensable}
     text = prose(page)
     assert re.findall(r"\btest_\w+", text) == [] and E_NOTATION.findall(text) == []
     assert "this 2-core machine" not in text
+
+
+def test_plot_labels_typeset_angles():
+    """Every matplotlib label, title and legend entry in the package writes an
+    angle's subscript in mathtext ($\\theta_i$), never raw ("θ_i" printed as
+    typed was on the validation report's furnace plots)."""
+    drawn = re.compile(r"(set_xlabel|set_ylabel|set_title|suptitle|label=|\.text\()")
+    raw = []
+    for folder, _, files in os.walk(os.path.join(ROOT, "mi_brdfs")):
+        for name in files:
+            if name.endswith(".py"):
+                path = os.path.join(folder, name)
+                with open(path, encoding="utf-8") as f:
+                    for n, line in enumerate(f, 1):
+                        code = line.split("#", 1)[0]
+                        if drawn.search(code) and re.search(r"[θφ]_\w", code):
+                            raw.append(f"{os.path.relpath(path, ROOT)}:{n}: {line.strip()}")
+    assert raw == []
+
+
+def test_screenshots_beside_the_guides_that_show_them(site):
+    """The site's screenshots (docs/screenshots.py) and the explorer's (at rest
+    and mid-drag) are committed beside the guide that shows them, PNGs of the
+    1280 px window, each under 400 KB; the pages show them."""
+    from PIL import Image
+    shown = {"guide/site.html": ("guide/site", ("plugin", "energy", "trade")),
+             "guide/explore.html": ("guide/explore", ("page", "drag"))}
+    for page, (folder, names) in shown.items():
+        html_text = read(site, page)
+        for name in names:
+            path = os.path.join(DOCS, folder, f"{name}.png")
+            assert os.path.getsize(path) < 400_000, path
+            assert Image.open(path).size[0] == 1280, path
+            assert re.search(rf'<img[^>]+src="[^"]*/{name}\.png"', html_text), (page, name)
+
+
+def test_explore_page_latencies_are_the_committed_run():
+    """The explorer guide's table of what the page sees: its quiet columns are
+    the committed run's rows ``page: ...`` (every request of a change
+    together, in Chromium), with the load average the bench recorded, and the
+    guide says which goals they meet."""
+    rows = {r["measure"]: r for r in committed("benchmarks", "results.json")["groups"]["explore"]}
+    with open(os.path.join(DOCS, "guide", "explore.md"), encoding="utf-8") as f:
+        guide = f.read()
+    table = {line.split("|")[1].strip(): [c.strip() for c in line.split("|")[2:-1]]
+             for line in guide.split("### What the page sees", 1)[1].split("###", 1)[0]
+             .splitlines() if line.startswith("| the ") or line.startswith("| every")}
+    views = {"the lobe in the plane of incidence and the albedo": "plots",
+             "the 3-D lobe": "3-D lobe", "the first pass of the 128² render": "first pass",
+             "the random walk (after the release)": "walk",
+             "every request of the change": "all"}
+    cell = lambda r: f"{r['median_ms']:.0f} ({r['max_ms']:.0f})"             # noqa: E731
+    for label, view in views.items():
+        assert table[label][0] == cell(rows[f"page: change -> {view}"]), label
+        drag = rows.get(f"page: drag -> {view}")
+        assert table[label][1] == (cell(drag) if drag else ""), label
+    assert f"load average {rows['page: drag -> plots']['load']} when it started" in guide
+    drag, first = rows["page: drag -> plots"], rows["page: change -> first pass"]
+    met = drag["median_ms"] <= 100 and first["median_ms"] <= 250
+    assert ("Quiet, the page meets\nboth" in guide) == met
+    assert f"follow a drag in {drag['median_ms']:.0f} ms" in guide

@@ -8,7 +8,7 @@ Mitsuba's own ``mitsuba`` command.
     mi-brdfs compare REFERENCE TEST [TEST ...] -o REPORT_DIR [--flip ldr|hdr] ...
                     (see mi_brdfs/tools/compare.py; exit 0 pass, 3 a threshold failed)
     mi-brdfs validate -o REPORT_DIR [--quick]   (exit 1 when a check fails)
-    mi-brdfs bench -o OUT_DIR [--quick] [--only GROUP]
+    mi-brdfs bench -o OUT_DIR [--quick] [--only GROUP] [--merge REPORT]
     mi-brdfs fit TARGET [TARGET ...] -o REPORT_DIR [--models NAME ...] [--quick]
                  [--metric cosine|ngan] [-j N] [--scheduler ADDRESS]
                     (see mi_brdfs/tools/fit; exit 1 when a fit fails)
@@ -114,10 +114,18 @@ def cmd_bench(args: argparse.Namespace) -> int:
     set_verbosity(args.verbose)
     log = (lambda *a: None) if args.quiet else (lambda msg: print(msg, file=sys.stderr))
     only = [g.strip() for g in args.only.split(",")] if args.only else None
-    results = bench.run(args.output, quick=args.quick, only=only, cache_dir=args.cache, log=log)
-    print(f"bench: {len(results['groups'])} groups in {results['seconds']:.0f} s -> "
-          f"{os.path.join(args.output, 'README.md')}"
-          + (" (--quick: a smoke test; its numbers are not measurements)" if args.quick else ""))
+    results = bench.run(args.output, quick=args.quick, only=only, cache_dir=args.cache, log=log,
+                        merge=args.merge)
+    run = results["runs"][-1]["group_seconds"]
+    kept = len(results["groups"]) - len(run)
+    groups = lambda n: f"{n} group{'s' * (n != 1)}"
+    print(f"bench: {groups(len(run))} "
+          + (f"taken from {args.merge}" if args.merge else
+             f"in {sum(t or 0 for t in run.values()):.0f} s")
+          + (f", {groups(kept)} kept from the previous report" if kept else "")
+          + f" -> {os.path.join(args.output, 'README.md')}"
+          + (" (--quick: a smoke test; its numbers are not measurements)"
+             if args.quick and not args.merge else ""))
     return 0
 
 
@@ -245,13 +253,17 @@ def parser() -> Parser:
 
     b = sub.add_parser("bench", parents=[common()], help="measure the speed/accuracy trade-offs")
     b.add_argument("-o", "--output", required=True,
-                   help="report folder: new, empty, or a previous report")
+                   help="report folder: new, empty, or a previous report (a previous bench "
+                        "report keeps the groups this run does not bring)")
     b.add_argument("--quick", action="store_true",
                    help="a smoke test that every group runs: tiny scene, few repeats, no "
                         "findings (CI); its numbers are not measurements")
     b.add_argument("--only", default=None, metavar="GROUP[,GROUP...]",
                    help="run these groups only (default: all of them): "
                         + ", ".join(BENCH_GROUPS))
+    b.add_argument("--merge", default=None, metavar="REPORT",
+                   help="run nothing: take the groups (--only's, or all) of another bench "
+                        "report folder, as they were measured, into the report -o")
     b.add_argument("--cache", default=None, help="reference cache (default ~/.cache/mi_brdfs)")
     b.set_defaults(run=cmd_bench)
 

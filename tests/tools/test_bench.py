@@ -306,18 +306,76 @@ def test_an_unknown_group_is_refused(tmp_path, capsys):
     assert not (tmp_path / "out").exists()
 
 
-def test_a_previous_report_is_replaced(results, tmp_path):
-    """A folder holding a bench report (its marker lists its files) takes the
-    next run: the old report's files go, the new one's come, nothing else."""
-    out, _, cache = results
-    previous = tmp_path / "report"
-    shutil.copytree(out, previous)
-    listed = json.loads((previous / ".mi-brdfs-report").read_text())
-    assert listed["command"] == "bench" and "builtin.png" in listed["files"]
-    assert cli.main(["bench", "--quick", "-q", "--only", "convergence", "-o", str(previous),
-                     "--cache", str(cache)]) == 0
-    assert sorted(os.listdir(previous)) == sorted(
-        [".mi-brdfs-report", "README.md", "results.csv", "results.json", "convergence.png"])
+def bench_quick(*args) -> None:
+    assert cli.main(["bench", "--quick", "-q", *args]) == 0
+
+
+def read_report(folder):
+    """A bench report's results, its marker's files, README and csv groups."""
+    results = json.loads((folder / "results.json").read_text())
+    listed = json.loads((folder / ".mi-brdfs-report").read_text())["files"]
+    groups = {row[0] for row in list(csv.reader(open(folder / "results.csv")))[1:]}
+    return results, listed, (folder / "README.md").read_text(), groups
+
+
+def test_a_partial_run_keeps_the_other_groups(tmp_path):
+    """bench --only GROUP into a previous bench report replaces that group and
+    keeps every other one: rows, plots, the files of a group's folder (the
+    trade sweep's trade/) and the findings' source rows; results.csv and
+    README.md are written again from the merged rows. (``--only explore``
+    into docs/benchmarks once deleted every other group and trade/.)"""
+    out, cache = tmp_path / "report", str(tmp_path / "cache")
+    bench_quick("--only", "convergence", "-o", str(out), "--cache", cache)
+    first, _, _, _ = read_report(out)
+    png = (out / "convergence.png").read_bytes()
+    (out / "trade").mkdir()                        # a group's folder the marker lists
+    (out / "trade" / "fits.json").write_text("[]")
+    marker = json.loads((out / ".mi-brdfs-report").read_text())
+    marker["files"].append("trade/fits.json")
+    (out / ".mi-brdfs-report").write_text(json.dumps(marker))
+
+    bench_quick("--only", "scaling", "-o", str(out), "--cache", cache)
+    r, listed, readme, csv_groups = read_report(out)
+    assert list(r["groups"]) == ["convergence", "scaling"] == sorted(csv_groups)
+    assert r["groups"]["convergence"] == first["groups"]["convergence"]
+    assert (out / "convergence.png").read_bytes() == png
+    assert (out / "trade" / "fits.json").read_text() == "[]"
+    assert {"convergence.png", "scaling.png", "trade/fits.json"} <= set(listed)
+    assert all((out / name).is_file() for name in listed)
+    assert [list(run["group_seconds"]) for run in r["runs"]] == [["convergence"], ["scaling"]]
+    assert all(f"## {bench.report.title(g)}" in readme for g in ("convergence", "scaling"))
+    assert "from 2 runs" in readme and r["smoke_test"] and r["findings"] == []
+
+    # the group run again: its rows replaced, its old run gone, the other kept
+    bench_quick("--only", "convergence", "-o", str(out), "--cache", cache)
+    r, listed, _, _ = read_report(out)
+    assert [list(run["group_seconds"]) for run in r["runs"]] == [["scaling"], ["convergence"]]
+    assert list(r["groups"]) == ["convergence", "scaling"] and "trade/fits.json" in listed
+
+
+def test_merge_brings_another_reports_groups(tmp_path, capsys):
+    """bench --merge REPORT runs nothing: it brings REPORT's groups (rows,
+    plots, runs) into -o's report, which keeps its own other groups; a report
+    written before runs were recorded (no "runs") is one run."""
+    a, b, cache = tmp_path / "a", tmp_path / "b", str(tmp_path / "cache")
+    bench_quick("--only", "convergence", "-o", str(a), "--cache", cache)
+    bench_quick("--only", "scaling", "-o", str(b), "--cache", cache)
+    old = json.loads((a / "results.json").read_text())
+    del old["runs"]                                # as the committed report was written
+    (a / "results.json").write_text(json.dumps(old))
+    brought = json.loads((b / "results.json").read_text())
+    assert cli.main(["bench", "--merge", str(b), "-o", str(a)]) == 0
+    assert "1 group taken from" in capsys.readouterr().out
+    r, listed, readme, _ = read_report(a)
+    assert r["groups"] == {"convergence": old["groups"]["convergence"],
+                           "scaling": brought["groups"]["scaling"]}
+    assert r["runs"][-1] == brought["runs"][0] and len(r["runs"]) == 2
+    assert (a / "scaling.png").read_bytes() == (b / "scaling.png").read_bytes()
+    assert "scaling.png" in listed and "convergence.png" in listed
+    line = refused(["--merge", str(b), "--only", "models", "-o", str(a)], capsys)
+    assert f"--merge {b} has no group 'models'; it has: scaling" in line
+    line = refused(["--merge", str(tmp_path), "-o", str(a)], capsys)
+    assert "cannot read the bench report's results.json" in line
 
 
 def test_a_missing_dependency_stops_it_before_any_group(tmp_path, capsys, monkeypatch):

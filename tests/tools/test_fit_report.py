@@ -130,6 +130,49 @@ def test_the_committed_trade_report_has_contents_and_links_back():
     assert_contents_link_each_section(page, targets)
 
 
+def test_the_committed_trade_report_reads_as_labels_and_full_size_slices():
+    """Each section's heading is the material's short label (the sweep's own,
+    not its spec, which follows in code), and each lobe-slice figure links to
+    its full-size image, which exists."""
+    from mi_brdfs.tools.fit import trade
+    folder = ROOT / "docs" / "benchmarks" / "trade"
+    page = (folder / "index.html").read_text()
+    headings = re.findall(r'<h2 id="[^"]+">([^<]+)</h2>', page)
+    specs = list(dict.fromkeys(r["target"] for r in json.loads(
+        (folder / "fits.json").read_text())))
+    labels = dict((spec, label) for label, spec in trade.TARGETS)
+    assert headings == [html_escape(labels[s]) for s in specs]
+    assert all(":" not in h and "=" not in h for h in headings)
+    links = re.findall(r'<a href="([^"]+__slices\.png)"[^>]*><img src="([^"]+)"', page)
+    assert len(links) == len(specs) and all(a == b for a, b in links)
+    assert all((folder / a).is_file() for a, _ in links)
+    assert page.count("click for full size") == len(specs)
+
+
+def html_escape(text: str) -> str:
+    import html
+    return html.escape(text)
+
+
+def test_label_of_a_target_spec():
+    """A target outside the sweep reads as its plugin and values; a file as its name."""
+    from mi_brdfs.tools.fit.report import label
+    assert label("roughconductor:material=Au,alpha=0.1") == "Au α0.1"
+    assert label("roughplastic:alpha=0.2,diffuse_reflectance=[0.1,0.2,0.6]") == (
+        "roughplastic, alpha 0.2, diffuse_reflectance [0.1,0.2,0.6]")
+    assert label("roughconductor:material=Cu,alpha=0.2") == "roughconductor, Cu, alpha 0.2"
+    assert label("/somewhere/gold.xml") == "gold.xml"
+
+
+def test_from_records_on_a_folder_without_a_sweep_says_so(tmp_path, capsys):
+    from mi_brdfs.tools.fit import trade
+    assert trade.main(["--from-records", "-o", str(tmp_path)]) == 1
+    err = capsys.readouterr().err.splitlines()
+    assert err == [f"python -m mi_brdfs.tools.fit.trade: error: {tmp_path} holds no trade "
+                   "sweep (no fits.json): nothing to write again; run the sweep there "
+                   "without --from-records"]
+
+
 def test_a_repeated_target_is_fitted_once_with_a_warning(tmp_path):
     said = []
     records = fit(["diffuse:reflectance=[0.5,0.4,0.3]", "diffuse:reflectance=[0.5, 0.4, 0.3]"],

@@ -3,12 +3,22 @@ and README.md with the tables and the findings — a plain-language answer per
 group, computed from the numbers of this run (one function per group, named
 after it, given the group's rows). A quick run is a smoke test: it draws no
 findings and its README says that its numbers are not measurements.
+
+A report may hold groups of several runs: a partial run (``--only``) into a
+previous bench report, or ``--merge`` of another report's groups, replaces
+the groups it brings and keeps the others — their rows, their plots, their
+folders (the trade sweep's ``trade/``) and every other file of the previous
+report; results.json records each group's run (``runs``: its date, settings
+and machine), and results.csv and README.md are written again from the
+merged rows. The folder is replaced as a whole, once the new report is
+complete (:mod:`mi_brdfs.tools.destinations`).
 """
 from __future__ import annotations
 
 import csv
 import json
 import os
+import shutil
 
 import numpy as np
 
@@ -257,6 +267,129 @@ def header(key: str) -> str:
     return f"{text} ({unit})" if unit else text
 
 
+# ----------------------------------------------------------------------------
+#  A report of several runs
+# ----------------------------------------------------------------------------
+
+RUN_KEYS = ("date", "settings_name", "smoke_test", "settings", "machine")
+WRITTEN = ("README.md", "results.json", "results.csv")       # written again from the rows
+
+
+def is_bench_report(folder: str) -> bool:
+    """Whether ``folder`` holds a previous bench report (its marker says so)."""
+    from .. import destinations
+    try:
+        with open(os.path.join(folder, destinations.MARKER)) as f:
+            return json.load(f).get("command") == "bench"
+    except (OSError, ValueError, AttributeError):
+        return False
+
+
+def load(folder: str, option: str) -> dict:
+    """The results of the bench report in ``folder`` (their runs recorded:
+    :func:`with_runs`); ValueError on one line if there is none to read."""
+    path = os.path.join(folder, "results.json")
+    try:
+        with open(path) as f:
+            results = json.load(f)
+        if not isinstance(results.get("groups"), dict):
+            raise ValueError("no groups")
+    except (OSError, ValueError, AttributeError) as error:
+        reason = getattr(error, "strerror", None) or str(error)
+        raise ValueError(f"{option} {folder}: cannot read the bench report's results.json "
+                         f"({reason}); give a bench report folder") from None
+    return with_runs(results)
+
+
+def with_runs(results: dict) -> dict:
+    """``results`` with ``runs``: the runs its groups come from, each with its
+    date (None when not recorded), settings, machine and its groups' seconds.
+    A report written before runs were recorded is one run."""
+    if "runs" not in results:
+        results = dict(results, runs=[{
+            **{k: results.get(k) for k in RUN_KEYS},
+            "group_seconds": {g: results.get("group_seconds", {}).get(g)
+                              for g in results["groups"]}}])
+    return results
+
+
+def taken(source: dict, names: list[str]) -> dict:
+    """The groups ``names`` of the report ``source``, as a report of their own."""
+    runs = [dict(run, group_seconds={g: t for g, t in run["group_seconds"].items()
+                                     if g in names}) for run in source["runs"]]
+    return summary({g: source["groups"][g] for g in names},
+                   {g: source.get("plots", {}).get(g, []) for g in names
+                    if source.get("plots", {}).get(g)},
+                   [run for run in runs if run["group_seconds"]])
+
+
+def merge(old: dict, new: dict) -> dict:
+    """The report ``old`` with the groups of ``new`` in place of its own (the
+    groups in the bench's order, groups it no longer has at the end)."""
+    from .groups import GROUPS
+    groups = {**old["groups"], **new["groups"]}
+    order = [g for g in GROUPS if g in groups] + [g for g in groups if g not in GROUPS]
+    plot_files = {**{g: p for g, p in old.get("plots", {}).items() if g not in new["groups"]},
+                  **new.get("plots", {})}
+    runs = [dict(run, group_seconds={g: t for g, t in run["group_seconds"].items()
+                                     if g not in new["groups"]}) for run in old["runs"]]
+    runs = [run for run in runs if run["group_seconds"]] + new["runs"]
+    return summary({g: groups[g] for g in order},
+                   {g: plot_files[g] for g in order if g in plot_files}, runs)
+
+
+def summary(groups: dict, plot_files: dict, runs: list[dict]) -> dict:
+    """A report's results from its groups, plots and runs: the settings'
+    name (or "mixed"), the smoke-test flag if any run was one, the newest
+    run's settings and machine, every group's seconds."""
+    names = {run["settings_name"] for run in runs}
+    seconds = {g: t for run in runs for g, t in run["group_seconds"].items()}
+    return {"settings_name": names.pop() if len(names) == 1 else "mixed",
+            "smoke_test": any(run["smoke_test"] for run in runs),
+            "settings": runs[-1]["settings"], "machine": runs[-1]["machine"],
+            "groups": groups, "group_seconds": {g: seconds.get(g) for g in groups},
+            "seconds": sum(t or 0 for t in seconds.values()), "plots": plot_files,
+            "runs": runs}
+
+
+def smoke_groups(results: dict) -> set[str]:
+    """The groups measured by a quick run (a smoke test: no findings)."""
+    return {g for run in results["runs"] if run["smoke_test"] for g in run["group_seconds"]}
+
+
+def group_files(folder: str, results: dict, names) -> list[str]:
+    """The files of the groups ``names`` in the report ``folder``: their
+    plots and the folder named after the group (e.g. ``trade/``), as paths
+    relative to ``folder``."""
+    files = [p for g in names for p in results.get("plots", {}).get(g, [])]
+    for g in names:
+        for base, _, found in os.walk(os.path.join(folder, g)):
+            rel = os.path.relpath(base, folder).replace(os.sep, "/")
+            files += [f"{rel}/{name}" for name in found]
+    return files
+
+
+def kept_files(folder: str, old: dict, replaced) -> list[str]:
+    """The files of the previous report in ``folder`` that a run bringing
+    the groups ``replaced`` keeps: all its marker lists but the files written
+    again and the replaced groups' files."""
+    from .. import destinations
+    dropped = set(WRITTEN) | set(group_files(folder, old, replaced))
+    return [n for n in destinations.previous_report(folder) or [] if n not in dropped]
+
+
+def copy_files(source: str, target: str, names: list[str]) -> None:
+    """Copy the files ``names`` (relative paths) from ``source`` into ``target``."""
+    for name in names:
+        path = os.path.join(target, *name.split("/"))
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+        shutil.copy2(os.path.join(source, *name.split("/")), path)
+
+
+# ----------------------------------------------------------------------------
+#  Writing the report
+# ----------------------------------------------------------------------------
+
 def _fmt(v) -> str:
     if isinstance(v, float):
         return f"{v:.4g}"
@@ -274,24 +407,42 @@ def write_csv(path: str, results: dict) -> None:
                         w.writerow([group, i, k, v])
 
 
+def run_line(run: dict) -> str:
+    """One run: its settings, date, seconds per group and machine."""
+    seconds = run["group_seconds"]
+    return (f"{run['settings_name']} run" + (f" of {run['date']}" if run.get("date") else "")
+            + f", {sum(t or 0 for t in seconds.values()):.0f} s ("
+            + ", ".join(g if t is None else f"{g} {t:.0f} s" for g, t in seconds.items())
+            + "). Machine: " + ", ".join(f"{k} {v}" for k, v in run["machine"].items()) + ".")
+
+
 def markdown(results: dict, about: dict[str, str], images: str = "") -> str:
     """README.md: the run, the findings (or the smoke-test notice), and per
     group what it measures (``about``), its table and its plots (their paths
     prefixed with ``images``: the documentation site shows the committed
     results from another folder)."""
-    lines = ["# mi-brdfs bench results", "",
-             f"{results['settings_name']} run, {results['seconds']:.0f} s ("
-             + ", ".join(f"{g} {t:.0f} s" for g, t in results.get("group_seconds", {}).items())
-             + "). Machine: "
-             + ", ".join(f"{k} {v}" for k, v in results["machine"].items()) + ".", ""]
-    if results.get("smoke_test"):
+    runs = with_runs(results)["runs"]
+    lines = ["# mi-brdfs bench results", ""]
+    if len(runs) == 1:
+        lines += [run_line(runs[0]), ""]
+    else:
+        lines += [f"The groups come from {len(runs)} runs, {results['seconds']:.0f} s in all "
+                  "(a partial run, `bench --only`, replaces its groups and keeps the others):",
+                  "",
+                  *(f"- {run_line(run)}" for run in runs), ""]
+    present = [g for g, rows in results["groups"].items() if rows]
+    smoke = [g for g in present if g in smoke_groups(with_runs(results))]
+    if smoke and smoke == present:
         lines += [f"**{SMOKE_TEST}**", ""]
+    elif smoke:
+        lines += [f"**{', '.join(smoke)}: quick run (--quick), a smoke test; their numbers are "
+                  "not measurements and draw no findings.**", ""]
     lines += ["Timings are medians of repeated renders after a warm-up (compile) render, "
               "in one process (materials, frozen, kernels, tracing: in processes of their own, "
               "as Dr.Jit traces every BSDF instance alive in the process); errors are relative "
               "MSE against a converged reference.", ""]
-    if not results.get("smoke_test"):
-        lines += ["## Findings", "", *(f"- {line}" for line in results.get("findings", [])), ""]
+    if results.get("findings"):
+        lines += ["## Findings", "", *(f"- {line}" for line in results["findings"]), ""]
     for group, rows in results["groups"].items():
         if not rows:
             continue

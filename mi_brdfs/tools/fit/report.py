@@ -46,6 +46,7 @@ import html
 import json
 import math
 import os
+import re
 
 from .. import pages
 from . import effective, models as M, plots, rank
@@ -120,7 +121,7 @@ def write(out: str, records: list[dict], settings, command: str, features: dict 
         for r in ordered:
             w.writerow([json.dumps(r.get(k)) if k in ("parameters", "effective") else r.get(k)
                         for k in FIELDS + CSV_EXTRA])
-    contents = [(name, rows[0]["target"]) for name, rows in by_target.items()]
+    contents = [(name, label(rows[0]["target"])) for name, rows in by_target.items()]
     with open(os.path.join(out, "index.html"), "w") as f:
         f.write(_html(sections, settings, command, contents))
     return ordered
@@ -221,10 +222,11 @@ HEAD = ("<tr><th>#</th><th>model</th><th>FLIP</th><th>image relMSE</th>"
 def _section(out: str, name: str, rows: list[dict], found: dict | None) -> str:
     ok = [r for r in rows if "error" not in r]
     failed = [r for r in rows if "error" in r]
-    title = html.escape(rows[0]["target"])
+    title = html.escape(label(rows[0]["target"]))
     plugin = rank.target_plugin(rows[0]["target"])
     parts = [f'<h2 id="{html.escape(name)}">{title}</h2>',
-             '<p class=top><a href="#top">↑ back to top</a></p>',
+             f'<p class=top><code>{html.escape(rows[0]["target"])}</code> · '
+             '<a href="#top">↑ back to top</a></p>',
              f"<p class=verdict>{html.escape(rank.verdict(rows, plugin))}</p>"]
     if not ok:
         parts.append("<p>every fit failed.</p>")
@@ -240,7 +242,8 @@ def _section(out: str, name: str, rows: list[dict], found: dict | None) -> str:
     equals = {r["model"]: [o["model"] for o in ok if o is not r and o["model"] in front
                            and rank.equal_cost(r, o)] for r in ok if r["model"] in front}
     if any(r.get("cost_ratio") is not None for r in ok):
-        plots.pareto_plot(os.path.join(out, f"{name}__pareto.png"), rows[0]["target"], ok)
+        plots.pareto_plot(os.path.join(out, f"{name}__pareto.png"), label(rows[0]["target"]),
+                          ok)
         parts.append(f'<img src="{name}__pareto.png" alt="Pareto plot">')
     body = [_row(r, front, equals) for r in ok]
     body += [f"<tr><td></td><td>{html.escape(r['model'])}</td><td colspan=14>FAILED: "
@@ -269,8 +272,26 @@ def _section(out: str, name: str, rows: list[dict], found: dict | None) -> str:
     if ok and "slices" in ok[0]:
         plots.slice_plot(os.path.join(out, f"{name}__slices.png"), rows[0]["target"], ok[0], ok)
     if ok and os.path.exists(os.path.join(out, f"{name}__slices.png")):   # or drawn by the run
-        parts.append(f'<img src="{name}__slices.png" alt="lobe slices" class="wide">')
+        parts.append(f'<figure class="slices"><a href="{name}__slices.png" title="full size">'
+                     f'<img src="{name}__slices.png" alt="lobe slices of {title}"></a>'
+                     "<figcaption>lobe slices per colour channel: click for full size"
+                     "</figcaption></figure>")
     return "\n".join(parts)
+
+
+def label(spec: str) -> str:
+    """A target's short label for a heading: the trade sweep's own (``Au α0.1``)
+    for its materials, else the plugin and its values (``roughconductor, Au,
+    alpha 0.1``), a file target by its file name."""
+    from .trade import TARGETS                    # trade imports this module
+    known = {s: name for name, s in TARGETS}
+    if spec in known:
+        return known[spec]
+    if ":" not in spec:
+        return os.path.basename(spec)
+    plugin, _, rest = spec.partition(":")
+    values = [item.partition("=") for item in re.split(r",(?![^\[]*\])", rest) if item]
+    return ", ".join([plugin] + [v if k == "material" else f"{k} {v}" for k, _, v in values])
 
 
 def _short(v) -> str:
@@ -290,7 +311,7 @@ td.p { font-size: 0.85em; max-width: 36em; }
 .renders { display: flex; flex-wrap: wrap; gap: 6px; }
 figure { text-align: center; font-size: 0.7em; }
 .renders img { height: 96px; }
-img.wide { max-width: 100%; }
+figure.slices img { width: 100%; max-width: 1200px; }
 p.top { font-size: 0.8em; margin-top: -0.5em; }
 """
 

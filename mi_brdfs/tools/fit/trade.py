@@ -213,6 +213,9 @@ def rebuild(folder: str, targets=TARGETS) -> list[dict]:
     as the current ranking and report writers make them (the renders, the XML
     and the lobe slices the run drew stay as they are). The run's settings are
     taken to be :data:`.task.FULL`'s, as the sweep's."""
+    if not os.path.isfile(os.path.join(folder, "fits.json")):
+        raise ValueError(f"{folder} holds no trade sweep (no fits.json): nothing to write "
+                         "again; run the sweep there without --from-records")
     with open(os.path.join(folder, "fits.json"), encoding="utf-8") as f:
         records = json.load(f)
     specs = list(dict.fromkeys(r["target"] for r in records))

@@ -239,7 +239,7 @@ def report_section(out: str, quick: bool = False, log=None) -> list[dict]:
                 ax.plot(thetas, w, "-", color=f"C{k}", lw=2.5, alpha=0.4, label=f"walk, {label}")
                 ax.plot(thetas, comp, "o", color=f"C{k}", ms=3, label=f"compensated, {label}")
                 ax.plot(thetas, single, ":", color=f"C{k}", lw=1)
-            ax.set_xlabel("incident angle θ_i (degrees)")
+            ax.set_xlabel(r"incident angle $\theta_i$ (degrees)")
             ax.set_ylabel("directional albedo")
             ax.set_title(f"cook_torrance {distribution}/{geometry} vs the walk on {smith}\n"
                          "(dotted: single scattering)", fontsize=8)
@@ -277,16 +277,66 @@ def report_section(out: str, quick: bool = False, log=None) -> list[dict]:
             _, single = plane_of_incidence(mi.load_dict(config), theta, n)
             deg = np.degrees(theta_o)
             ax.plot(deg, walked[smith, theta], "-", color=f"C{k}", lw=2.5, alpha=0.4,
-                    label=f"walk ({smith}), θ_i {theta}°")
-            ax.plot(deg, comp, "--", color=f"C{k}", label=f"compensated, θ_i {theta}°")
-            ax.plot(deg, single, ":", color=f"C{k}", lw=1, label=f"single, θ_i {theta}°")
+                    label=rf"walk ({smith}), $\theta_i$ {theta}°")
+            ax.plot(deg, comp, "--", color=f"C{k}", label=rf"compensated, $\theta_i$ {theta}°")
+            ax.plot(deg, single, ":", color=f"C{k}", lw=1, label=rf"single, $\theta_i$ {theta}°")
         ax.set_title(f"{distribution}/{geometry}, α 0.6, F0 0.6", fontsize=9)
-        ax.set_xlabel("θ_o in the plane of incidence (°; > 0: mirror side)", fontsize=8)
-        ax.set_ylabel("f·cos θ_o", fontsize=8)
+        ax.set_xlabel(r"$\theta_o$ in the plane of incidence (°; > 0: mirror side)", fontsize=8)
+        ax.set_ylabel(r"$f\,\cos\theta_o$ (1/sr)", fontsize=8)
         ax.legend(fontsize=5.5)
     fig.tight_layout()
     fig.savefig(os.path.join(out, "groundtruth_slices.png"))
+    residual_map(os.path.join(out, RESIDUAL_MAP), paths, quick)
     return rows
+
+
+RESIDUAL_MAP = "groundtruth_residuals.png"
+MAP_ALPHAS = (0.05, 0.1, 0.2, 0.3, 0.45, 0.6, 0.8, 1.0)
+MAP_F0S = (0.3, 1.0)
+
+
+def residual_map(path: str, paths: int, quick: bool = False) -> np.ndarray:
+    """The figure ``path``: compensated cook_torrance's albedo (white m_S,
+    k = 0) minus the walk's on its own Smith microsurface, over the incident
+    angle and α, for GGX and Beckmann with Smith's G at F0 0.3 and 1; the
+    differences, [distribution][F0][α][θ]."""
+    from matplotlib.figure import Figure
+    thetas = REPORT_THETAS[::2] if quick else REPORT_THETAS
+    alphas = MAP_ALPHAS[1::3] if quick else MAP_ALPHAS
+    mus = np.cos(np.radians(thetas))
+    diff = np.empty((2, len(MAP_F0S), len(alphas), len(thetas)))
+    for d, distribution in enumerate(("ggx", "beckmann")):
+        for a, alpha in enumerate(alphas):
+            walked = albedo(distribution, mus, alpha, MAP_F0S, paths, seed=5)   # [θ][F0]
+            for j, f0 in enumerate(MAP_F0S):
+                config = {"type": "cook_torrance", "distribution": distribution,
+                          "geometry": "smith", "alpha": alpha, "k": 0.0, "f0": f0,
+                          "specular_reflectance": 1.0, "energy_compensation": True}
+                diff[d, j, a] = compensated_albedo(config, thetas, n=512) - walked[:, j]
+    top = max(float(np.abs(diff).max()), 1e-3)
+    fig = Figure(figsize=(9.0, 6.0), dpi=100)
+    axes = fig.subplots(2, len(MAP_F0S), sharex=True, sharey=True)
+    for d, distribution in enumerate(("GGX", "Beckmann")):
+        for j, f0 in enumerate(MAP_F0S):
+            ax = axes[d, j]
+            image = ax.imshow(diff[d, j], cmap="RdBu_r", vmin=-top, vmax=top, origin="lower",
+                              aspect="auto")
+            for (a, t), value in np.ndenumerate(diff[d, j]):
+                ax.text(t, a, f"{1e3 * value:.1f}", ha="center", va="center", fontsize=6)
+            ax.set_xticks(range(len(thetas)), [f"{t:g}" for t in thetas])
+            ax.set_yticks(range(len(alphas)), [f"{x:g}" for x in alphas])
+            ax.set_title(f"{distribution} × Smith, F0 {f0:g}", fontsize=9)
+            if d == 1:
+                ax.set_xlabel(r"incident angle $\theta_i$ (degrees)")
+            if j == 0:
+                ax.set_ylabel(r"roughness $\alpha$")
+    bar = fig.colorbar(image, ax=axes, shrink=0.9)
+    bar.set_label("compensated albedo − walk's albedo (fraction of the incident energy; "
+                  "cells: ×10⁻³)", fontsize=8)
+    fig.suptitle(f"Compensated cook_torrance against the random walk ({paths} paths per "
+                 "point), white $m_S$, k = 0", fontsize=9)
+    fig.savefig(path, bbox_inches="tight")
+    return diff
 
 
 def report_html(rows: list[dict]) -> str:
@@ -308,7 +358,10 @@ def report_html(rows: list[dict]) -> str:
                      f"<td>{r['paths']}</td></tr>")
     parts.append("</table><div class='figs'>" + "".join(
         f"<img src='{esc(r['plot'])}' alt='ground truth'>" for r in rows)
-        + "<img src='groundtruth_slices.png' alt='BRDF slices'></div><p>BRDF slices: "
+        + "<img src='groundtruth_slices.png' alt='BRDF slices'>"
+        f"<img src='{RESIDUAL_MAP}' alt='residual map: compensated albedo minus the walk, "
+        "over angle and roughness'></div><p>The residual map: the compensated albedo minus "
+        "the walk's at every angle and α ≤ 1 (GGX and Beckmann with Smith's G). BRDF slices: "
         "f·cos θ_o in the plane of incidence, the walk's by next-event estimation; the "
         "compensation lobe is separable, the walk's multiple scattering is not, and the "
         "separable G1·G1 shapes the single scattering (as Mitsuba's roughconductor).</p>")

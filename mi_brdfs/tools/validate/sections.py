@@ -284,7 +284,7 @@ def furnace_section(size: Settings, out: str, models: dict) -> list[dict]:
                     "plot": plot,
                 })
             ax.axhline(1.0, color="k", lw=0.6)
-            ax.set_xlabel("incident angle θ_i (degrees)")
+            ax.set_xlabel(r"incident angle $\theta_i$ (degrees)")     # typeset by mathtext
             ax.set_ylabel("directional albedo")
             ax.set_title(f"{name}: {label}", fontsize=9)
             ax.legend(fontsize=6)

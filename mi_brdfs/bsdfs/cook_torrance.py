@@ -396,6 +396,7 @@ class Inputs(NamedTuple):
     f0: Float                       # F0 (also the compensation's table axis)
     fresnel: tuple = ()             # what the Fresnel form reads beyond F0, at the point
     t_i: Float | None = None        # base="plastic": the transmittance t(cos θ_i)
+    f0_walk: Float | Spectrum | None = None   # compensated: the walk tables' F0 (per channel)
 
 
 class CookTorrance(BRDF):
@@ -495,10 +496,10 @@ class CookTorrance(BRDF):
                                    "(Blinn's D is isotropic here: give alpha)")
         given = ("alpha_u", "alpha_v") if self.anisotropic else ("alpha",)
         form = self.options.fresnel
-        if getattr(self.options, "energy_compensation", False) and form != "schlick":
+        if getattr(self.options, "energy_compensation", False) and self.options.base == "plastic":
             raise reader.error("energy_compensation", True,
-                               f'false with fresnel="{form}" (its random-walk reference is '
-                               "tabulated for Schlick's F only)")
+                               'false with base="plastic" (no random walk of the substrate '
+                               "under the interface is measured: the walk is the conductor's)")
         if self.options.base == "plastic":
             self.check_plastic(reader)
         if "material" in props:
@@ -631,9 +632,28 @@ class CookTorrance(BRDF):
         t_i = None
         if o.base == "plastic":
             t_i = self.transmittance(mi.Frame3f.cos_theta(si.wi))
-        return Inputs(self.colour("diffuse_reflectance", "diffuse", si, active),
-                      self.colour("specular_reflectance", "specular", si, active),
-                      microfacet, self.m_f0, reads, t_i)
+        inp = Inputs(self.colour("diffuse_reflectance", "diffuse", si, active),
+                     self.colour("specular_reflectance", "specular", si, active),
+                     microfacet, self.m_f0, reads, t_i)
+        if self.state.plan.lobes.multiple:             # (the plan holds the compensation)
+            inp = inp._replace(f0_walk=self.walk_f0(inp))
+        return inp
+
+    def walk_f0(self, inp):
+        """The F0 at which the random walk's tables (Schlick's F at every
+        bounce) are read for the chosen form: Schlick's own F0, else the F0 of
+        the Schlick curve of the same hemispherical average F_avg, per channel
+        (:func:`.fresnel.schlick_equivalent`; Kulla & Conty 2017's F_avg)."""
+        form = self.options.fresnel
+        if form == "schlick":
+            return inp.f0
+        if form == "dielectric":
+            f_avg = fresnel.dielectric_average(inp.fresnel[0])
+        elif form == "conductor":
+            f_avg = fresnel.conductor_average(*inp.fresnel)
+        else:
+            f_avg = fresnel.f82_average(self.switch("f0"), inp.fresnel[0])
+        return fresnel.schlick_equivalent(f_avg)
 
     def transmittance(self, cos_theta):
         """base="plastic": t(cos θ), the light the rough interface lets through."""
@@ -729,14 +749,18 @@ class CookTorrance(BRDF):
     # --- energy compensation: what single scattering misses of the random walk ---
     def compensation(self) -> compensation.Compensation:
         o = self.options
+        # the F0 axis: Schlick's f0, or the F0 equivalent to another form, computed
+        # per lane (a source None: never contracted as a constant)
+        f0 = "f0" if o.fresnel == "schlick" else None
         if self.anisotropic:            # over (mu, phi, alpha_u, alpha_v, F0)
             return compensation.Tabulated(
                 walk_residual(o.distribution, o.geometry, True),
-                parameters=lambda inp: (inp.microfacet.alpha, inp.microfacet.alpha_v, inp.f0),
-                sources=("alpha_u", "alpha_v", "f0"), colour=lambda inp: inp.colour_s)
+                parameters=lambda inp: (inp.microfacet.alpha, inp.microfacet.alpha_v,
+                                        inp.f0_walk),
+                sources=("alpha_u", "alpha_v", f0), colour=lambda inp: inp.colour_s)
         return compensation.Tabulated(
             walk_residual(o.distribution, o.geometry),
-            parameters=lambda inp: (inp.microfacet.alpha, inp.f0), sources=("alpha", "f0"),
+            parameters=lambda inp: (inp.microfacet.alpha, inp.f0_walk), sources=("alpha", f0),
             colour=lambda inp: inp.colour_s)
 
     # --- what runs of it: the tests, the validation report, the bench, the pictures ---

@@ -973,6 +973,26 @@ class CookTorrance(BRDF):
                     for f in ({"fresnel": "conductor", "eta": 1.3, "kappa": 2.0},
                               {"fresnel": "dielectric", "int_ior": 1.5, "ext_ior": 1.1},
                               {"fresnel": "f82", "f0": 0.8, "f82_tint": 0.6})]
+        # Compensated with each Fresnel form (the walk tables read per channel at the
+        # F0 of the Schlick curve of the same F_avg): the white conductor preserves 1,
+        # a coloured one reflects less; gradients of eta, kappa, int_ior, f82_tint
+        # through the tables.
+        compensated = [{**c, **f, "distribution": d, "geometry": "smith", "alpha": a,
+                        "k": 0.0, "specular_reflectance": 1.0, "energy_compensation": True}
+                       for f in forms for d, a in (("ggx", 0.5), ("beckmann", 0.2))]
+        furnace += [preserves(f"compensated conductor η 0, κ 1, {d}, α = {a}",
+                              {**c, "fresnel": "conductor", "distribution": d,
+                               "geometry": "smith", "alpha": a, "k": 0.0,
+                               "specular_reflectance": 1.0, "energy_compensation": True})
+                    for d, a in (("ggx", 0.3), ("beckmann", 1.0))]
+        furnace += [Furnace(f"compensated {cfg['fresnel']}, {cfg['distribution']}, "
+                            f"α = {cfg['alpha']}", cfg) for cfg in compensated]
+        chi2 += [Chi2(compensated[0], (0, 60, 85)),
+                 Chi2({**compensated[7], "k": 0.3}, (45,))]
+        consistency += compensated[::3]
+        extremes += [{**cfg, "alpha": a} for cfg in compensated[:2] + compensated[4:6]
+                     for a in (1e-4, 1e3)]
+        interior += [{**cfg, "energy_compensation": True} for cfg in interior]
         return Cases(
             chi2=chi2, consistency=consistency, furnace=furnace, extremes=extremes,
             interior=[{**c, "distribution": d, "geometry": "smith", "alpha": 0.4, "k": 0.4,
@@ -1001,7 +1021,8 @@ class CookTorrance(BRDF):
             + [{**c, **f, "distribution": "ggx", "geometry": "smith", "alpha": 0.3, "k": 0.2}
                for f in forms]
             + [{**plastic, "distribution": "ggx", "alpha": 0.3, "mode": "hdr",
-                "diffuse_reflectance": rgb([0.8, 0.2, 0.1])}],
+                "diffuse_reflectance": rgb([0.8, 0.2, 0.1])}]
+            + compensated[1::2],
             lobe={**c, "distribution": "ggx", "alpha": 0.3, "k": 0.3, "f0": 0.5,
                   "diffuse_reflectance": 0.8},
             costs=[(f"cook_torrance {d} {g}", {**c, "distribution": d, "geometry": g, "alpha": 0.3})

@@ -124,11 +124,14 @@ _MU, _W = _legendre()
 
 def average(F, lo=0.0):
     """2 ∫ F(μ) μ dμ over [lo, 1] of a Fresnel form F(μ) (a callable of the
-    cosine), by Gauss-Legendre quadrature."""
+    cosine), by Gauss-Legendre quadrature; from lo > 0 in t, μ = lo + (1 - lo) t²,
+    which smooths a square-root edge at lo (the dielectric's critical angle)."""
+    if type(lo) is float and lo == 0.0:
+        return sum((F(mu) * (2.0 * w * mu) for mu, w in zip(_MU, _W)), 0.0)
     total, span = 0.0, 1.0 - lo
-    for mu, w in zip(_MU, _W):
-        x = lo + span * mu
-        total = total + F(x) * (2.0 * w * x * span)
+    for t, w in zip(_MU, _W):
+        x = lo + span * (t * t)
+        total = total + F(x) * (2.0 * w * x * span * 2.0 * t)
     return total
 
 
@@ -143,7 +146,7 @@ def dielectric_average(eta):
     angle, cos θ < μ_c = √(1 - η²), reflects all (μ_c² of the average) and the
     rest is integrated from μ_c, so that the quadrature never straddles the kink."""
     mu_c2 = dr.fmax(1.0 - eta * eta, 0.0)
-    return mu_c2 + average(lambda c: dielectric(eta, c), dr.sqrt(mu_c2))
+    return mu_c2 + average(lambda c: dielectric(eta, c), dr.safe_sqrt(mu_c2))
 
 
 def schlick_average(f0):

@@ -569,7 +569,10 @@ def test_compensation_in_the_scalar_variant():
                {"type": "phong", "exponent": 20.0, "energy_compensation": True},
                {"type": "ward", "alpha_u": 0.1, "alpha_v": 0.5, "energy_compensation": True},
                cook_torrance("beckmann", alpha_u=0.2, alpha_v=0.6, f0=0.5),
-               {"type": "oren_nayar", "sigma": 0.8, "energy_compensation": True}]
+               {"type": "oren_nayar", "sigma": 0.8, "energy_compensation": True},
+               cook_torrance("ggx", alpha=0.3, fresnel="conductor", material="Au"),
+               cook_torrance("beckmann", alpha=0.5, fresnel="dielectric", int_ior=1.33),
+               cook_torrance("ggx", alpha=0.4, fresnel="f82", f0=0.8, f82_tint=0.5)]
     wi, wo = direction_pairs()
     wi, wo = wi[::3], wo[::3]
     run = subprocess.run([sys.executable, "-c", SCALAR_SCRIPT, "scalar_rgb", json.dumps(configs),

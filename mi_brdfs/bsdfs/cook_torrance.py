@@ -48,8 +48,14 @@ number ``f0``; a colour comes from m_S. The other forms are what it approximates
   Schlick's there, a colour, between Schlick and the exact conductor.
 
 With a coloured F (conductor, F82) the F of each direction multiplies m_S.
-Energy compensation is for Schlick's F only (its random-walk tables are over
-F0): with another form it is refused at load time.
+Energy compensation takes every form: the random-walk tables, made with
+Schlick's F at every bounce, are read per channel (per wavelength in spectral
+variants) at the F0 whose Schlick curve has the form's hemispherical average
+F_avg = 2∫F(μ)μ dμ (Kulla & Conty 2017's F_avg;
+:func:`mi_brdfs.bsdfs.fresnel.schlick_equivalent`). Against the walk with the
+form's own F at every bounce (Heitz et al. 2016), gold, copper and aluminium
+are within 2 %, the white conductor within 0.3 %; F82 with tints far below 1
+is not (see the limitations page). With ``base="plastic"`` it is refused.
 
 **Base** (``base``): the lecture's diffuse lobe is ``"lambert"`` (the
 default), k·m_D/π beside (1 - k) times the specular lobe. ``"plastic"`` is
@@ -81,7 +87,8 @@ multiple-scattering lobe of Kulla & Conty 2017 / Turquin 2019
 (:mod:`mi_brdfs.bsdfs.compensation`) whose albedo is what single scattering misses
 of the random walk on the Smith microsurface (Heitz, Hanika, d'Eon &
 Dachsbacher 2016) with Schlick's F at every bounce, tabulated over
-(cos θ, α, F0) for every α (to ∞): the specular lobe reflects m_S·W(θ, α, F0),
+(cos θ, α, F0) for every α (to ∞; another Fresnel form reads it at the F0 of
+the same F_avg, above): the specular lobe reflects m_S·W(θ, α, F0),
 W the walk's albedo (within 1.4 % for GGX and 2.0 % for Beckmann with Smith
 G; Blinn's D and the V-cavity against the walk of the nearest Smith
 microsurface: the documentation's energy guide). A white surface (F0 = 1,

@@ -407,6 +407,22 @@ class Compensation:
         return ()
 
 
+def coloured(x) -> bool:
+    """True for a colour (or spectrum) of channels, False for one number per lane."""
+    return dr.is_array_v(x) and dr.size_v(x) > 0
+
+
+def per_channel(lookup: Callable, params: tuple):
+    """``lookup(params)``, or, where a parameter is a colour (an F0 per colour
+    channel or wavelength), one lookup per channel gathered into that colour:
+    the table's axes are numbers, its g per channel then."""
+    colour = next((p for p in params if coloured(p)), None)
+    if colour is None:
+        return lookup(params)
+    return type(colour)(*(lookup(tuple(p[c] if coloured(p) else p for p in params))
+                          for c in range(dr.size_v(colour))))
+
+
 class Tabulated(Compensation):
     """g from a :class:`Table` over (directions, p_1, ..., p_k): ``parameters(inp)``
     gives the p_j at a lane, ``sources`` names the plugin parameter each comes
@@ -421,18 +437,20 @@ class Tabulated(Compensation):
 
     def prepare(self, plugin) -> dict:
         inp = plugin.eval_textures(dr.zeros(mi.SurfaceInteraction3f), True)
-        members = [getattr(plugin, "m_" + name) for name in self.sources]
-        constants = tuple(None if isinstance(obj, mi.Object) and obj.is_spatially_varying()
+        members = [None if name is None else getattr(plugin, "m_" + name)
+                   for name in self.sources]
+        constants = tuple(None if obj is None or coloured(x)
+                          or (isinstance(obj, mi.Object) and obj.is_spatially_varying())
                           else float(x[0]) if dr.is_array_v(x) else float(x)
                           for obj, x in zip(members, self.parameters(inp)))
         self.specialised = self.table.specialise(constants)
         return self.specialised.data
 
     def albedo(self, inp, v, data):
-        return self.specialised(v, self.parameters(inp), data)
+        return per_channel(lambda p: self.specialised(v, p, data), self.parameters(inp))
 
     def average(self, inp, data):
-        return self.specialised.average(self.parameters(inp), data)
+        return per_channel(lambda p: self.specialised.average(p, data), self.parameters(inp))
 
     def colour(self, inp):
         return self.colour_of(inp)

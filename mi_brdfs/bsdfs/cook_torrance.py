@@ -48,8 +48,14 @@ number ``f0``; a colour comes from m_S. The other forms are what it approximates
   Schlick's there, a colour, between Schlick and the exact conductor.
 
 With a coloured F (conductor, F82) the F of each direction multiplies m_S.
-Energy compensation is for Schlick's F only (its random-walk tables are over
-F0): with another form it is refused at load time.
+Energy compensation takes every form: the random-walk tables, made with
+Schlick's F at every bounce, are read per channel (per wavelength in spectral
+variants) at the F0 whose Schlick curve has the form's hemispherical average
+F_avg = 2∫F(μ)μ dμ (Kulla & Conty 2017's F_avg;
+:func:`mi_brdfs.bsdfs.fresnel.schlick_equivalent`). Against the walk with the
+form's own F at every bounce (Heitz et al. 2016), gold, copper and aluminium
+are within 2 %, the white conductor within 0.3 %; F82 with tints far below 1
+is not (see the limitations page). With ``base="plastic"`` it is refused.
 
 **Base** (``base``): the lecture's diffuse lobe is ``"lambert"`` (the
 default), k·m_D/π beside (1 - k) times the specular lobe. ``"plastic"`` is
@@ -81,7 +87,8 @@ multiple-scattering lobe of Kulla & Conty 2017 / Turquin 2019
 (:mod:`mi_brdfs.bsdfs.compensation`) whose albedo is what single scattering misses
 of the random walk on the Smith microsurface (Heitz, Hanika, d'Eon &
 Dachsbacher 2016) with Schlick's F at every bounce, tabulated over
-(cos θ, α, F0) for every α (to ∞): the specular lobe reflects m_S·W(θ, α, F0),
+(cos θ, α, F0) for every α (to ∞; another Fresnel form reads it at the F0 of
+the same F_avg, above): the specular lobe reflects m_S·W(θ, α, F0),
 W the walk's albedo (within 1.4 % for GGX and 2.0 % for Beckmann with Smith
 G; Blinn's D and the V-cavity against the walk of the nearest Smith
 microsurface: the documentation's energy guide). A white surface (F0 = 1,
@@ -396,6 +403,7 @@ class Inputs(NamedTuple):
     f0: Float                       # F0 (also the compensation's table axis)
     fresnel: tuple = ()             # what the Fresnel form reads beyond F0, at the point
     t_i: Float | None = None        # base="plastic": the transmittance t(cos θ_i)
+    f0_walk: Float | Spectrum | None = None   # compensated: the walk tables' F0 (per channel)
 
 
 class CookTorrance(BRDF):
@@ -495,10 +503,10 @@ class CookTorrance(BRDF):
                                    "(Blinn's D is isotropic here: give alpha)")
         given = ("alpha_u", "alpha_v") if self.anisotropic else ("alpha",)
         form = self.options.fresnel
-        if getattr(self.options, "energy_compensation", False) and form != "schlick":
+        if getattr(self.options, "energy_compensation", False) and self.options.base == "plastic":
             raise reader.error("energy_compensation", True,
-                               f'false with fresnel="{form}" (its random-walk reference is '
-                               "tabulated for Schlick's F only)")
+                               'false with base="plastic" (no random walk of the substrate '
+                               "under the interface is measured: the walk is the conductor's)")
         if self.options.base == "plastic":
             self.check_plastic(reader)
         if "material" in props:
@@ -631,9 +639,28 @@ class CookTorrance(BRDF):
         t_i = None
         if o.base == "plastic":
             t_i = self.transmittance(mi.Frame3f.cos_theta(si.wi))
-        return Inputs(self.colour("diffuse_reflectance", "diffuse", si, active),
-                      self.colour("specular_reflectance", "specular", si, active),
-                      microfacet, self.m_f0, reads, t_i)
+        inp = Inputs(self.colour("diffuse_reflectance", "diffuse", si, active),
+                     self.colour("specular_reflectance", "specular", si, active),
+                     microfacet, self.m_f0, reads, t_i)
+        if self.state.plan.lobes.multiple:             # (the plan holds the compensation)
+            inp = inp._replace(f0_walk=self.walk_f0(inp))
+        return inp
+
+    def walk_f0(self, inp):
+        """The F0 at which the random walk's tables (Schlick's F at every
+        bounce) are read for the chosen form: Schlick's own F0, else the F0 of
+        the Schlick curve of the same hemispherical average F_avg, per channel
+        (:func:`.fresnel.schlick_equivalent`; Kulla & Conty 2017's F_avg)."""
+        form = self.options.fresnel
+        if form == "schlick":
+            return inp.f0
+        if form == "dielectric":
+            f_avg = fresnel.dielectric_average(inp.fresnel[0])
+        elif form == "conductor":
+            f_avg = fresnel.conductor_average(*inp.fresnel)
+        else:
+            f_avg = fresnel.f82_average(self.switch("f0"), inp.fresnel[0])
+        return fresnel.schlick_equivalent(f_avg)
 
     def transmittance(self, cos_theta):
         """base="plastic": t(cos θ), the light the rough interface lets through."""
@@ -729,14 +756,18 @@ class CookTorrance(BRDF):
     # --- energy compensation: what single scattering misses of the random walk ---
     def compensation(self) -> compensation.Compensation:
         o = self.options
+        # the F0 axis: Schlick's f0, or the F0 equivalent to another form, computed
+        # per lane (a source None: never contracted as a constant)
+        f0 = "f0" if o.fresnel == "schlick" else None
         if self.anisotropic:            # over (mu, phi, alpha_u, alpha_v, F0)
             return compensation.Tabulated(
                 walk_residual(o.distribution, o.geometry, True),
-                parameters=lambda inp: (inp.microfacet.alpha, inp.microfacet.alpha_v, inp.f0),
-                sources=("alpha_u", "alpha_v", "f0"), colour=lambda inp: inp.colour_s)
+                parameters=lambda inp: (inp.microfacet.alpha, inp.microfacet.alpha_v,
+                                        inp.f0_walk),
+                sources=("alpha_u", "alpha_v", f0), colour=lambda inp: inp.colour_s)
         return compensation.Tabulated(
             walk_residual(o.distribution, o.geometry),
-            parameters=lambda inp: (inp.microfacet.alpha, inp.f0), sources=("alpha", "f0"),
+            parameters=lambda inp: (inp.microfacet.alpha, inp.f0_walk), sources=("alpha", f0),
             colour=lambda inp: inp.colour_s)
 
     # --- what runs of it: the tests, the validation report, the bench, the pictures ---
@@ -949,6 +980,26 @@ class CookTorrance(BRDF):
                     for f in ({"fresnel": "conductor", "eta": 1.3, "kappa": 2.0},
                               {"fresnel": "dielectric", "int_ior": 1.5, "ext_ior": 1.1},
                               {"fresnel": "f82", "f0": 0.8, "f82_tint": 0.6})]
+        # Compensated with each Fresnel form (the walk tables read per channel at the
+        # F0 of the Schlick curve of the same F_avg): the white conductor preserves 1,
+        # a coloured one reflects less; gradients of eta, kappa, int_ior, f82_tint
+        # through the tables.
+        compensated = [{**c, **f, "distribution": d, "geometry": "smith", "alpha": a,
+                        "k": 0.0, "specular_reflectance": 1.0, "energy_compensation": True}
+                       for f in forms for d, a in (("ggx", 0.5), ("beckmann", 0.2))]
+        furnace += [preserves(f"compensated conductor η 0, κ 1, {d}, α = {a}",
+                              {**c, "fresnel": "conductor", "distribution": d,
+                               "geometry": "smith", "alpha": a, "k": 0.0,
+                               "specular_reflectance": 1.0, "energy_compensation": True})
+                    for d, a in (("ggx", 0.3), ("beckmann", 1.0))]
+        furnace += [Furnace(f"compensated {cfg['fresnel']}, {cfg['distribution']}, "
+                            f"α = {cfg['alpha']}", cfg) for cfg in compensated]
+        chi2 += [Chi2(compensated[0], (0, 60, 85)),
+                 Chi2({**compensated[7], "k": 0.3}, (45,))]
+        consistency += compensated[::3]
+        extremes += [{**cfg, "alpha": a} for cfg in compensated[:2] + compensated[4:6]
+                     for a in (1e-4, 1e3)]
+        interior += [{**cfg, "energy_compensation": True} for cfg in interior]
         return Cases(
             chi2=chi2, consistency=consistency, furnace=furnace, extremes=extremes,
             interior=[{**c, "distribution": d, "geometry": "smith", "alpha": 0.4, "k": 0.4,
@@ -977,7 +1028,8 @@ class CookTorrance(BRDF):
             + [{**c, **f, "distribution": "ggx", "geometry": "smith", "alpha": 0.3, "k": 0.2}
                for f in forms]
             + [{**plastic, "distribution": "ggx", "alpha": 0.3, "mode": "hdr",
-                "diffuse_reflectance": rgb([0.8, 0.2, 0.1])}],
+                "diffuse_reflectance": rgb([0.8, 0.2, 0.1])}]
+            + compensated[1::2],
             lobe={**c, "distribution": "ggx", "alpha": 0.3, "k": 0.3, "f0": 0.5,
                   "diffuse_reflectance": 0.8},
             costs=[(f"cook_torrance {d} {g}", {**c, "distribution": d, "geometry": g, "alpha": 0.3})

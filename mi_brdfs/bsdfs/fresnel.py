@@ -95,3 +95,76 @@ def f82(f0, tint, c):
     m = 1.0 - c
     m2 = m * m
     return dr.fmax(schlick(f0, c) - a * (c * m2 * m2 * m2), 0.0)
+
+
+# ----------------------------------------------------------------------------
+#  Hemispherical averages: the Fresnel factor of multiple scattering
+# ----------------------------------------------------------------------------
+#
+# F_avg = 2 ∫ F(μ) μ dμ over μ in [0, 1], the cosine-weighted average of F over
+# the hemisphere: the reflectance of a bounce between facets whose directions are
+# spread over the hemisphere (Kulla & Conty, "Revisiting Physically Based Shading
+# at Imageworks", SIGGRAPH 2017 course, their F_avg). Schlick's is
+# F0 + (1 - F0)/21 (2 ∫ (1 - μ)^5 μ dμ = 1/21); F82-tint's subtracts
+# a · 2 ∫ μ² (1 - μ)^6 dμ = a/126; the exact forms are integrated by
+# Gauss-Legendre (AVERAGE_NODES nodes in μ, traced per lane: textured or
+# spectral indices and their gradients go through).
+
+AVERAGE_NODES = 24
+
+
+def _legendre():
+    import numpy as np
+    x, w = np.polynomial.legendre.leggauss(AVERAGE_NODES)
+    return [float(v) for v in 0.5 * (x + 1.0)], [float(v) for v in 0.5 * w]
+
+
+_MU, _W = _legendre()
+
+
+def average(F, lo=0.0):
+    """2 ∫ F(μ) μ dμ over [lo, 1] of a Fresnel form F(μ) (a callable of the
+    cosine), by Gauss-Legendre quadrature; from lo > 0 in t, μ = lo + (1 - lo) t²,
+    which smooths a square-root edge at lo (the dielectric's critical angle)."""
+    if type(lo) is float and lo == 0.0:
+        return sum((F(mu) * (2.0 * w * mu) for mu, w in zip(_MU, _W)), 0.0)
+    total, span = 0.0, 1.0 - lo
+    for t, w in zip(_MU, _W):
+        x = lo + span * (t * t)
+        total = total + F(x) * (2.0 * w * x * span * 2.0 * t)
+    return total
+
+
+def conductor_average(eta, kappa):
+    """F_avg of :func:`conductor` (quadrature; within 1e-6 of a fine trapezoid rule
+    for gold's and aluminium's indices)."""
+    return average(lambda c: conductor(eta, kappa, c))
+
+
+def dielectric_average(eta):
+    """F_avg of :func:`dielectric`: for η < 1 the part beyond the critical
+    angle, cos θ < μ_c = √(1 - η²), reflects all (μ_c² of the average) and the
+    rest is integrated from μ_c, so that the quadrature never straddles the kink."""
+    mu_c2 = dr.fmax(1.0 - eta * eta, 0.0)
+    return mu_c2 + average(lambda c: dielectric(eta, c), dr.safe_sqrt(mu_c2))
+
+
+def schlick_average(f0):
+    """Schlick's F_avg = F0 + (1 - F0)/21 (exact)."""
+    return f0 + (1.0 - f0) * (1.0 / 21.0)
+
+
+def f82_average(f0, tint):
+    """F82-tint's F_avg = F0 + (1 - F0)/21 - a/126 (exact, a as in :func:`f82`;
+    without :func:`f82`'s clamp at 0, which a tint in [0, 1] never reaches)."""
+    m = 1.0 - F82_COS
+    a = schlick(f0, F82_COS) * (1.0 - tint) / (F82_COS * m ** 6)
+    return schlick_average(f0) - a * (1.0 / 126.0)
+
+
+def schlick_equivalent(f_avg):
+    """The F0 whose Schlick curve has the hemispherical average ``f_avg``,
+    (21 F_avg - 1)/20, clamped to [0, 1]: the coordinate at which the random
+    walk's tables (tabulated with Schlick's F at every bounce) are read for
+    another Fresnel form (Schlick's own F0 maps to itself)."""
+    return dr.fmin(dr.fmax((21.0 * f_avg - 1.0) * (1.0 / 20.0), 0.0), 1.0)

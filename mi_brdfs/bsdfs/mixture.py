@@ -254,7 +254,7 @@ class Mixture:
         if use.multiple:
             g_i, _, colour = ms
             w = self.lobe_weights(inp)[0 if self.state.compensation.lobe == "diffuse" else 1]
-            w_ms = w * mean(colour) * g_i
+            w_ms = w * mean(colour * g_i)          # (g per channel for a coloured F)
         weights = [w if u else mi.Float(0.0) for u, w in zip(use, (w_d, w_s, w_ms))]
         total_w = weights[0] + weights[1] + weights[2]
         ok = total_w > 0

@@ -11,7 +11,8 @@ import numpy as np
 
 from ..destinations import OutputError, check_output_file
 from .microsurface import DISTRIBUTIONS, Alpha
-from .report import (compensated_albedo, grazing_difference, reference, reference_agreement,
+from .report import (compensated_albedo, fresnel_reference, grazing_difference, reference,
+                     reference_agreement, residuals_fresnel,
                      reference_anisotropic, residuals, residuals_anisotropic, slice_difference)
 from .walk import albedo
 
@@ -25,6 +26,10 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--roughness", choices=("isotropic", "anisotropic"), default="isotropic",
                         help="which reference albedos -o writes: over (theta, alpha, F0), or "
                              "over (theta, phi, alpha_u, alpha_v, F0) (default isotropic)")
+    parser.add_argument("--fresnel-forms", action="store_true",
+                        help="-o writes instead the walk's albedos with cook_torrance's other "
+                             "Fresnel forms at every bounce (Au, Cu, Al, F82, a dielectric, "
+                             "white) over (theta, alpha, channel)")
     parser.add_argument("--reference", help="read them from here (instead of walking); "
                                             "either kind")
     parser.add_argument("--paths", type=int, default=100_000, help="paths per point")
@@ -105,6 +110,15 @@ def print_anisotropic(paths: int) -> None:
 
 
 def print_residuals(ref: dict) -> None:
+    if "forms" in ref:                               # the other Fresnel forms
+        print("compensated cook_torrance (Smith G, k 0, m_S 1) against the walk with the same "
+              f"Fresnel at every bounce, alpha in {ref['alpha']}, theta in {ref['theta']} deg, "
+              "per channel:")
+        for r in residuals_fresnel(ref):
+            alpha, theta, e, w = r["at"]
+            print(f"{r['form']}, {r['distribution']}: largest relative difference "
+                  f"{100 * r['relative']:.2f} % (at alpha {alpha}, {theta} deg: {e} vs {w})")
+        return
     if "phi" in ref:                                 # an anisotropic reference
         for distribution in DISTRIBUTIONS:
             for geometry in ("smith", "cook_torrance"):
@@ -177,7 +191,8 @@ def main(argv: list[str] | None = None) -> int:
     if not (args.output or args.residuals):
         return 0
     if ref is None:
-        make = reference_anisotropic if args.roughness == "anisotropic" else reference
+        make = fresnel_reference if args.fresnel_forms else \
+            reference_anisotropic if args.roughness == "anisotropic" else reference
         ref = make(args.paths, log)
     if args.output:
         tmp = args.output + ".tmp"

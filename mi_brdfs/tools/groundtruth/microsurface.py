@@ -125,6 +125,38 @@ def fresnel(f0, cos):
     return f0 + (1.0 - f0) * (1.0 - np.clip(cos, 0.0, 1.0)) ** 5
 
 
+def conductor(eta, kappa, cos):
+    """The exact unpolarised reflectance of a conductor of complex index
+    n = η + iκ (relative to the outside) at cos θ, from the Fresnel amplitudes
+    in complex arithmetic (Born & Wolf, *Principles of Optics*, §1.5 and §14.2):
+    r_s = (cos - n cos_t)/(cos + n cos_t), r_p = (n cos - cos_t)/(n cos + cos_t),
+    cos_t = sqrt(1 - sin²/n²)."""
+    c = np.clip(np.asarray(cos, dtype=np.float64), 0.0, 1.0)
+    n = complex(eta, kappa)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ct = np.sqrt(1.0 - (1.0 - c * c) / (n * n) + 0j)
+        r_s = (c - n * ct) / (c + n * ct)
+        r_p = (n * c - ct) / (n * c + ct)
+    return np.nan_to_num(0.5 * (np.abs(r_s) ** 2 + np.abs(r_p) ** 2), nan=1.0)
+
+
+def dielectric(eta, cos):
+    """The exact reflectance of a dielectric interface of relative index η
+    (light from outside): :func:`conductor` with κ = 0 (total internal
+    reflection, η < 1, gives |r| = 1 there)."""
+    return conductor(eta, 0.0, cos)
+
+
+def f82(f0, tint, cos):
+    """Hoffman's F82-tint (*Generalization of Adobe's Fresnel Model*, 2023):
+    Schlick's curve less b·cos·(1 - cos)^6, b set so that F(1/7) = tint ×
+    Schlick(1/7)."""
+    c = np.clip(np.asarray(cos, dtype=np.float64), 0.0, 1.0)
+    cb = 1.0 / 7.0
+    b = fresnel(f0, cb) * (1.0 - tint) / (cb * (1.0 - cb) ** 6)
+    return np.maximum(fresnel(f0, c) - b * c * (1.0 - c) ** 6, 0.0)
+
+
 def single_scattering(distribution: str, wi, wo, alpha, f0=1.0):
     """f·cos θ_o of the height-correlated Smith microfacet BRDF (Heitz 2014,
     eq. 99: G2 = 1 / (1 + Λ(wi) + Λ(wo))), F D G2 / (4 cos θ_i)."""

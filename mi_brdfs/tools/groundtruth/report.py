@@ -66,6 +66,111 @@ def reference_anisotropic(paths: int = 100_000, log=None) -> dict:
     return out
 
 
+# The other Fresnel forms of cook_torrance, walked with that Fresnel at every bounce
+# (one column per colour channel): Mitsuba's measured conductors as the RGB
+# variants hold them, F82-tint, a dielectric and the white conductor (F = 1).
+FRESNEL_ALPHAS = (0.1, 0.2, 0.3, 0.5, 0.7, 1.0)
+FRESNEL_THETAS = (0, 30, 45, 60, 70, 80, 85)
+FRESNEL_MATERIALS = ("Au", "Cu", "Al")
+FRESNEL_F82 = ({"fresnel": "f82", "f0": 0.9, "f82_tint": [1.0, 0.9, 0.8]},      # mild dips
+               {"fresnel": "f82", "f0": 0.9, "f82_tint": [0.9, 0.6, 0.2]})      # strong ones
+FRESNEL_DIELECTRIC = {"fresnel": "dielectric", "int_ior": 1.5, "ext_ior": 1.0}
+
+
+def fresnel_forms() -> list[dict]:
+    """The forms of :func:`fresnel_reference`: each a name, the plugin
+    parameters that select it (explicit numbers: ``eta`` and ``kappa`` of a
+    ``material`` as ``roughconductor`` reduces them to RGB in the active RGB variant)."""
+    from ...bsdfs.cook_torrance import material_textures
+    si = dr.zeros(mi.SurfaceInteraction3f)
+    forms = []
+    for name in FRESNEL_MATERIALS:
+        eta, kappa = ([float(x) for x in np.array(t.eval(si)).ravel()]
+                      for t in material_textures(name))
+        forms.append({"name": name, "params": {"fresnel": "conductor", "eta": eta,
+                                               "kappa": kappa}})
+    forms += [{"name": name, "params": p} for name, p in zip(("F82 mild", "F82 strong"),
+                                                             FRESNEL_F82)]
+    forms.append({"name": "dielectric 1.5", "params": FRESNEL_DIELECTRIC})
+    forms.append({"name": "white", "params": {"fresnel": "conductor", "eta": 0.0, "kappa": 1.0}})
+    return forms
+
+
+def fresnel_columns(params: dict) -> list:
+    """The walk's Fresnel functions (NumPy, one per channel) of a form's parameters."""
+    from .microsurface import conductor, dielectric, f82
+    rgb = lambda x: x if isinstance(x, list) else [x] * 3
+    form = params["fresnel"]
+    if form == "conductor":
+        if params["eta"] == 0.0 and params["kappa"] == 1.0:
+            return [1.0]                                 # the perfect conductor: F = 1
+        return [lambda c, e=e, k=k: conductor(e, k, c)
+                for e, k in zip(rgb(params["eta"]), rgb(params["kappa"]))]
+    if form == "dielectric":
+        return [lambda c: dielectric(params["int_ior"] / params["ext_ior"], c)]
+    return [lambda c, f=f, t=t: f82(f, t, c)
+            for f, t in zip(rgb(params["f0"]), rgb(params["f82_tint"]))]
+
+
+def fresnel_reference(paths: int = 100_000, log=None) -> dict:
+    """The walk's albedo with each of :func:`fresnel_forms` at every bounce, at
+    FRESNEL_THETAS x FRESNEL_ALPHAS, for each distribution:
+    ``ref["forms"][i]["walk"][distribution][theta][alpha][channel]``."""
+    forms = fresnel_forms()
+    out = {"paths": paths, "seed": REFERENCE_SEED, "theta": list(FRESNEL_THETAS),
+           "alpha": list(FRESNEL_ALPHAS), "forms": forms}
+    columns = [fresnel_columns(f["params"]) for f in forms]
+    flat = [c for cs in columns for c in cs]                 # one walk serves every column
+    for f in forms:
+        f["walk"] = {}
+    for distribution in DISTRIBUTIONS:
+        rows = []
+        for theta in FRESNEL_THETAS:
+            mu = math.cos(math.radians(theta))
+            rows.append(albedo(distribution, mu, np.array(FRESNEL_ALPHAS), flat, paths,
+                               REFERENCE_SEED).round(6))
+            if log:
+                log(f"{distribution}: theta {theta}")
+        w = np.array(rows)                                   # [theta][alpha][column]
+        start = 0
+        for f, cs in zip(forms, columns):
+            f["walk"][distribution] = w[:, :, start:start + len(cs)].tolist()
+            start += len(cs)
+    return out
+
+
+def fresnel_config(form: dict, distribution: str, alpha: float) -> dict:
+    """The compensated cook_torrance (k = 0, m_S = 1, Smith G) of one form of
+    :func:`fresnel_forms` (its lists as RGB colours)."""
+    params = {k: {"type": "rgb", "value": v} if isinstance(v, list) else v
+              for k, v in form["params"].items()}
+    return {"type": "cook_torrance", "distribution": distribution, "geometry": "smith",
+            "alpha": alpha, "k": 0.0, "specular_reflectance": 1.0,
+            "energy_compensation": True, **params}
+
+
+def residuals_fresnel(ref: dict, n: int = 512) -> list[dict]:
+    """Each form of ``ref`` (:func:`fresnel_reference`) and distribution: the
+    compensated plugin's albedo against the walk's, per channel, the largest
+    relative difference and where (RGB variants)."""
+    out = []
+    for form in ref["forms"]:
+        for distribution in DISTRIBUTIONS:
+            worst = (-1.0, None)
+            for a, alpha in enumerate(ref["alpha"]):
+                config = fresnel_config(form, distribution, alpha)
+                for t, theta in enumerate(ref["theta"]):
+                    w = np.array(form["walk"][distribution][t][a])
+                    e = np.array([compensated_albedo(config, (theta,), n, channel=c)[0]
+                                  for c in range(len(w))])
+                    r = float(np.max(np.abs(e - w) / w))
+                    if r > worst[0]:
+                        worst = (r, (alpha, theta, e.round(4).tolist(), w.tolist()))
+            out.append({"form": form["name"], "distribution": distribution,
+                        "relative": worst[0], "at": worst[1]})
+    return out
+
+
 def reference_agreement(ref: dict, paths: int, seed: int = REFERENCE_SEED + 1,
                         log=None, thetas=None, alphas=None) -> dict:
     """The reference albedos ``ref`` (as :func:`reference` writes them) against
@@ -100,8 +205,8 @@ def reference_agreement(ref: dict, paths: int, seed: int = REFERENCE_SEED + 1,
 
 
 def compensated_albedo(config: dict, thetas, n: int = 1024, seed: int = 7,
-                       phi: float = 0.0) -> np.ndarray:
-    """The albedo of a plugin configuration (white m_S: the first channel) at
+                       phi: float = 0.0, channel: int = 0) -> np.ndarray:
+    """The albedo of a plugin configuration (white m_S: the first channel, or ``channel``) at
     each angle (degrees; the viewer at azimuth ``phi`` degrees from the
     tangent): 2π times the mean of eval over n² jittered strata of the square
     mapped to the hemisphere by Mitsuba's equal-area (concentric) map, which
@@ -118,7 +223,7 @@ def compensated_albedo(config: dict, thetas, n: int = 1024, seed: int = 7,
         si.wi = mi.Vector3f(*(dr.opaque(mi.Float, c) for c in (
             math.sin(t) * math.cos(p), math.sin(t) * math.sin(p), math.cos(t))))
         value = bsdf.eval(mi.BSDFContext(), si, wo)
-        out.append(float(dr.sum(mi.Float64(value[0]))[0]) * 2.0 * math.pi / (n * n))
+        out.append(float(dr.sum(mi.Float64(value[channel]))[0]) * 2.0 * math.pi / (n * n))
     return np.array(out)
 
 

@@ -24,7 +24,9 @@ meets a facet where it is); going up, τ' <= 0 means the path has left.
 wb = -w: the normal m is drawn from the normals visible from wb,
 D_wb(m) = max(0, wb·m) D(m) / A(wb), the ray is mirrored about it, and the
 path's weight is multiplied by Schlick's Fresnel F(wb·m) for every F0 asked
-(one path serves every F0). For F0 = 1 every weight stays 1: the walk loses
+(one path serves every F0), or by any other Fresnel form given as a function of
+the cosine (:func:`.microsurface.conductor`, :func:`.microsurface.dielectric`,
+:func:`.microsurface.f82`; one column per colour channel). For F0 = 1 every weight stays 1: the walk loses
 no light, the white furnace of the model.
 
 **BRDF.** Next-event estimation: at each facet the phase function toward the
@@ -82,7 +84,7 @@ def walk(distribution: str, wi, alpha, f0s, seed: int, paths: int, wo=None,
     wi = np.asarray(wi, dtype=np.float64)
     n = len(wi)
     ax, ay = (np.broadcast_to(a, (n,)) for a in pair(alpha))
-    f0s = np.atleast_1d(np.asarray(f0s, dtype=np.float64))
+    f0s = columns(f0s)
     wo = None if wo is None else np.asarray(wo, dtype=np.float64)
     sums = np.zeros((2, 2, n, len(f0s)))     # [albedo, value][Σ x, Σ x²] over paths
     for start in range(0, paths, CHUNK):
@@ -97,6 +99,21 @@ def walk(distribution: str, wi, alpha, f0s, seed: int, paths: int, wo=None,
     if wo is None:
         return Walked(mean[0], error[0], None, None)
     return Walked(mean[0], error[0], mean[1], error[1])
+
+
+def columns(f0s):
+    """The Fresnel forms of a walk's columns: a float array of Schlick F0s, or
+    a list whose items are F0s or functions F(cos) (NumPy) of another form."""
+    if any(callable(f) for f in np.atleast_1d(np.asarray(f0s, dtype=object))):
+        return list(f0s)
+    return np.atleast_1d(np.asarray(f0s, dtype=np.float64))
+
+
+def reflectance(f0s, c):
+    """F at the cosines c (n,) for each column of ``f0s`` (:func:`columns`): (n, columns)."""
+    if isinstance(f0s, np.ndarray):
+        return fresnel(f0s, c[:, None])
+    return np.stack([f(c) if callable(f) else fresnel(f, c) for f in f0s], axis=-1)
 
 
 def _walk_chunk(distribution, wi, ax, ay, f0s, rng, m, wo, orders):
@@ -135,13 +152,13 @@ def _walk_chunk(distribution, wi, ax, ay, f0s, rng, m, wo, orders):
             with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
                 phase = d_visible(distribution, wb, h, alpha) / (4.0 * c)
                 leave = np.exp(-tau * lam(distribution, light, alpha))    # G1(wo, τ)
-                estimate = weight * (phase * leave)[:, None] * fresnel(f0s, c[:, None])
+                estimate = weight * (phase * leave)[:, None] * reflectance(f0s, c)
             seen[cell] += np.where(light[:, 2:] > 0, np.nan_to_num(estimate), 0.0)
         # ---- scattering: a visible normal, the mirror direction, Fresnel
         m_normal = sample_visible(distribution, wb, alpha, u[1], u[2])
         c = dot(wb, m_normal)
         w = 2.0 * c[:, None] * m_normal - wb
-        weight = weight * fresnel(f0s, c[:, None])
+        weight = weight * reflectance(f0s, c)
         if not np.isfinite(w).all():
             raise FloatingPointError("random walk: a direction is not finite")
     return leaves, seen

@@ -373,7 +373,8 @@ class Scenes:
         if self.folder not in [str(p) for p in resolver]:
             resolver.prepend(self.folder)
         text = ElementTree.tostring(root, encoding="unicode")
-        return mi.load_string(text, parallel=False, optimize=optimize, **self.params)
+        used = {k: v for k, v in self.params.items() if re.search(rf"\${k}\b", text)}
+        return mi.load_string(text, parallel=False, optimize=optimize, **used)
 
     def render(self, root, seed: int = 0) -> np.ndarray:
         scene = self.load(root)

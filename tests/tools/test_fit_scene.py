@@ -138,7 +138,7 @@ def _small(path):
 @pytest.mark.parametrize("args, message", [
     (["--scene", "missing.xml"], "scene not found: missing.xml"),
     (["--scene", "BSDF"], "its root is <bsdf>, not <scene>; give a Mitsuba scene file"),
-    (["--scene", "NOTXML"], "not an XML file"),
+    (["--scene", "NOTXML"], "not well-formed XML"),
     (["--scene", "SCENE", "diffuse:"], "give TARGETs or --scene, not both"),
     (["--scene", "SCENE", "--models", "nosuch"], "--models: unknown model 'nosuch'"),
     ([], "give a TARGET"),
@@ -163,3 +163,25 @@ def test_an_output_that_is_a_file_is_refused_and_kept(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert code == 1 and len(err.splitlines()) == 1 and "is an existing file" in err
     assert (tmp_path / "r").read_text() == "mine"
+
+
+ROOT = Path(__file__).resolve().parents[2]
+COMMITTED = ROOT / "docs" / "benchmarks" / "scene-fit"
+
+
+@pytest.mark.parametrize("name", ["cornell-box", "course", "several"])
+def test_the_guide_reads_the_committed_scene_reports(name):
+    """The fit guide's table of the three committed scene reports gives their
+    figures; each report's page has its pictures and its simplified scene."""
+    result = json.loads((COMMITTED / name / "scenefit.json").read_text(encoding="utf-8"))
+    guide = (ROOT / "docs" / "guide" / "fit.md").read_text(encoding="utf-8")
+    row = next(line for line in guide.splitlines() if f"scene-fit/{name}/index.html" in line)
+    assert f"{result['replaced']} of {len(result['materials'])}" in row
+    assert f"FLIP {result['flip_image']:.3f} (seed noise {result['noise_flip_image']:.3f})" in row
+    t = result["timing"]
+    if t:
+        assert f"{t['time_per_sample_ratio']:.2f}×" in row
+        assert f"{t['time_to_noise_ratio']:.2f}×" in row
+        assert f"load {t['load_average']:.1f}" in row
+    for file in ("index.html", "original.png", "simplified.png", result["simplified"]):
+        assert (COMMITTED / name / file).exists(), file

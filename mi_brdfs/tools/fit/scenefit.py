@@ -115,7 +115,8 @@ def _parse(path: str, shown: str) -> ElementTree.Element:
     try:
         return ElementTree.parse(path).getroot()
     except ElementTree.ParseError as error:
-        raise CLIError(f"--scene {shown}: not an XML file ({error})") from None
+        raise CLIError(f"--scene {shown}: not well-formed XML ({error}; Python's parser is "
+                       "stricter than Mitsuba's: e.g. no '--' inside a comment)") from None
     except OSError as error:
         raise CLIError(f"--scene {shown}: cannot read {path} ({error.strerror})") from None
 

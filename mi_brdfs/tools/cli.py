@@ -166,7 +166,9 @@ def cmd_fit_scene(args: argparse.Namespace) -> int:
     try:
         result = scenefit.fit_scene(path, args.output, defines, args.models, res=res, spp=spp,
                                     jobs=args.jobs, show=show,
-                                    command=" ".join(["mi-brdfs", *sys.argv[1:]]))
+                                    command=" ".join(["mi-brdfs", *sys.argv[1:]]),
+                                    log=None if args.quiet else
+                                    (lambda line: print(f"{args.prog}: {line}", file=sys.stderr)))
     finally:
         show.close()
     print(f"report: {os.path.join(args.output, 'index.html')}; {scenefit.summary(result)}")

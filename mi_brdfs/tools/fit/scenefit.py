@@ -476,9 +476,11 @@ def _check_models(model_names):
 def fit_scene(scene_path: str, out_dir: str, defines: dict | None = None,
               model_names: list[str] | None = None, res: int = RES, spp: int = SPP,
               jobs: int = 1, show=None, command: str = "mi-brdfs fit --scene",
-              candidates: int = CANDIDATES, rounds: int = TIMING_ROUNDS) -> dict:
+              candidates: int = CANDIDATES, rounds: int = TIMING_ROUNDS, log=None) -> dict:
     """Simplify every material of ``scene_path`` (module docstring) and write
-    the report to ``out_dir``; returns the report's record."""
+    the report to ``out_dir``; returns the report's record. ``log(line)``
+    after each material's verdict and before the timing."""
+    log = log or (lambda line: None)
     if mi.variant() != "llvm_ad_rgb":
         mi.set_variant("llvm_ad_rgb")
     mi_brdfs.register()
@@ -560,6 +562,8 @@ def fit_scene(scene_path: str, out_dir: str, defines: dict | None = None,
                     swaps[m.key] = element
                 break
         if "became" in row:
+            log(f"{m.label}: becomes {row['became']['model']} ({row['became']['ops']} traced "
+                f"operations against {row['ops']})")
             continue
         if "stand_in" in row:
             c = row["stand_in"]
@@ -575,6 +579,11 @@ def fit_scene(scene_path: str, out_dir: str, defines: dict | None = None,
                 f"(image) / {_num(best['flip_pixels'])} (its pixels) against the seed noise "
                 f"{noise[0]:.3f} / {_num(noise[1])}")
 
+    for row in rows:
+        if "became" not in row:
+            log(f"{row['label']}: kept: {row['kept_because']}")
+    if swaps:
+        log(f"timing the scene before and after ({rounds} rounds)")
     simplified = variant(root, swaps, res, params)
     final = scenes.render(simplified, 0)
     for row in rows:

@@ -300,7 +300,7 @@ def parser() -> Parser:
                         "same in its renders, or kept with the reason; the simplified scene "
                         "and its report are written to -o")
     f.add_argument("-D", dest="defines", action="append", default=[], metavar="key=value",
-                   help="--scene: a scene parameter, as mitsuba -D (e.g. -D mode=hdr)")
+                   help="a parameter of the --scene file, as mitsuba -D (e.g. -D mode=hdr)")
     f.add_argument("-o", "--output", required=True,
                    help="report folder: new, empty, or a previous report")
     f.add_argument("--models", nargs="+", default=None, metavar="NAME",

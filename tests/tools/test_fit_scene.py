@@ -120,6 +120,25 @@ def test_materials_are_found_through_references_wrappers_and_lights():
     assert light.find("bsdf").get("id") is None      # the light's own copy
 
 
+def test_includes_are_inlined_with_their_file_names_found():
+    """The studio test scene includes its camera and its materials (the file
+    named by a parameter); a texture the included file names relative to the
+    main scene's folder, as Mitsuba finds it, stays so; a textured material
+    is kept."""
+    studio = ASSETS.parent / "studio.xml"
+    root, params = scenefit.read_scene(str(studio), {"mode": "hdr"})
+    assert root.find("include") is None and root.find("sensor") is not None
+    names = sorted(e.get("value") for e in root.iter("string") if e.get("name") == "filename")
+    assert {"assets/checker.png", "assets/sphere.obj", "assets/torus.ply"} <= set(names)
+    assert all(n.startswith("assets/") for n in names), names
+    found = scenefit.find_materials(root)
+    assert [(m.label, m.shapes, m.wrappers) for m in found] == [
+        ("matte: lambert", [1], ["twosided"]), ("glossy: cook_torrance", [2, 3], [])]
+    target = scenefit.T.Target("matte", "matte", xml=scenefit.target_xml(found[0], root, params))
+    assert scenefit.kept_reason(found[0], target, scenefit._named(root)) == \
+        "a texture drives its parameters; the fit fits constant parameters"
+
+
 def test_the_cornell_box_as_xml_renders_as_its_dictionary(tmp_path):
     path = tmp_path / "cbox.xml"
     scenefit.write_cornell_box(str(path))
@@ -141,6 +160,7 @@ def _small(path):
     (["--scene", "NOTXML"], "not well-formed XML"),
     (["--scene", "SCENE", "diffuse:"], "give TARGETs or --scene, not both"),
     (["--scene", "SCENE", "--models", "nosuch"], "--models: unknown model 'nosuch'"),
+    (["diffuse:", "-D", "res=8"], "-D is for --scene"),
     ([], "give a TARGET"),
 ])
 def test_bad_input_gets_one_line(tmp_path, capsys, args, message):

@@ -121,15 +121,18 @@ def _parse(path: str, shown: str) -> ElementTree.Element:
         raise CLIError(f"--scene {shown}: cannot read {path} ({error.strerror})") from None
 
 
-def _rebase(elements, src: str, dst: str, params: dict) -> None:
+def _rebase(elements, src: str, dst: str, params: dict, also: tuple = ()) -> None:
     """Every relative ``filename`` under ``elements``, read from folder
-    ``src``, rewritten relative to folder ``dst``."""
+    ``src`` (or from the first of ``also`` where the file is, as Mitsuba's
+    resolver searches its folders in turn), rewritten relative to folder ``dst``."""
     for top in elements:
         for e in top.iter():
             if e.tag == "string" and e.get("name") == "filename":
                 value = _subst(e.get("value", ""), params)
                 if not os.path.isabs(value):
-                    value = os.path.relpath(os.path.join(src, value), dst)
+                    found = next((f for f in (src, *also)
+                                  if os.path.exists(os.path.join(f, value))), src)
+                    value = os.path.relpath(os.path.join(found, value), dst)
                 e.set("value", value.replace(os.sep, "/"))
 
 
@@ -147,7 +150,7 @@ def _inline(parent: ElementTree.Element, folder: str, base: str, params: dict, s
         here = os.path.dirname(os.path.abspath(path))
         _inline(root, here, base, params, shown, depth + 1)
         found = list(root) if root.tag == "scene" else [root]
-        _rebase(found, here, base, params)
+        _rebase(found, here, base, params, also=(base,))
         parent.remove(e)
         for j, child in enumerate(found):
             parent.insert(i + j, child)

@@ -12,6 +12,8 @@ Mitsuba's own ``mitsuba`` command.
     mi-brdfs fit TARGET [TARGET ...] -o REPORT_DIR [--models NAME ...] [--quick]
                  [--metric cosine|ngan] [-j N] [--scheduler ADDRESS]
                     (see mi_brdfs/tools/fit; exit 1 when a fit fails)
+    mi-brdfs fit --scene SCENE -o REPORT_DIR [-D key=value ...] [--models NAME ...]
+                 [--quick] [-j N]   (see mi_brdfs/tools/fit/scenefit.py)
     mi-brdfs explore [--port PORT] [--host HOST] [--no-browser]
                     (see mi_brdfs/tools/explore)
     mi-brdfs --version
@@ -40,7 +42,7 @@ from ..render import tonemap
 from . import render
 from .explore import add_parser as add_explore
 from .arguments import integer, real, set_threads, set_verbosity
-from .errors import one_line
+from .errors import CLIError, one_line
 
 DESCRIPTION = ("The course lecture's BRDF models as Mitsuba 3 plugins: render scenes, compare "
                "renders, validate the plugins, benchmark them and fit them to materials. "
@@ -134,6 +136,13 @@ def cmd_fit(args: argparse.Namespace) -> int:
     from .fit import sweep
 
     set_verbosity(args.verbose)
+    if args.scene is not None:
+        return cmd_fit_scene(args)
+    if not args.targets:
+        raise CLIError("give a TARGET (an XML file holding a <bsdf>, or PLUGIN:key=value,...) "
+                       "or --scene SCENE.xml")
+    if args.defines:
+        raise CLIError("-D is for --scene; a TARGET takes its values in PLUGIN:key=value,...")
     show = sweep.progress_printer(args.prog, enabled=not args.quiet, verbose=args.verbose > 0)
     try:
         records = fit.fit(args.targets, args.output, args.models, quick=args.quick,
@@ -147,6 +156,31 @@ def cmd_fit(args: argparse.Namespace) -> int:
     print(f"report: {fit.report_path(args.output)}; {len(records) - len(failed)} fits, "
           f"{len(failed)} failed")
     return 1 if failed else 0
+
+
+def cmd_fit_scene(args: argparse.Namespace) -> int:
+    from .fit import scenefit, sweep
+
+    if args.targets:
+        raise CLIError(f"give TARGETs or --scene, not both (got {args.targets[0]} and "
+                       f"--scene {args.scene})")
+    path, bundled = render.resolve_scene(args.scene)
+    defines = render.parse_defines(args.defines)
+    if bundled:
+        render.check_bundled_defines(args.scene, defines)
+    show = sweep.progress_printer(args.prog, enabled=not args.quiet, verbose=args.verbose > 0)
+    res, spp = (scenefit.QUICK_RES, scenefit.QUICK_SPP) if args.quick else \
+        (scenefit.RES, scenefit.SPP)
+    try:
+        result = scenefit.fit_scene(path, args.output, defines, args.models, res=res, spp=spp,
+                                    jobs=args.jobs, show=show,
+                                    command=" ".join(["mi-brdfs", *sys.argv[1:]]),
+                                    log=None if args.quiet else
+                                    (lambda line: print(f"{args.prog}: {line}", file=sys.stderr)))
+    finally:
+        show.close()
+    print(f"report: {os.path.join(args.output, 'index.html')}; {scenefit.summary(result)}")
+    return 0
 
 
 # ----------------------------------------------------------------------------
@@ -269,9 +303,16 @@ def parser() -> Parser:
 
     f = sub.add_parser("fit", parents=[common(threads=False)],
                        help="fit every course model to BSDFs: error, images, cost; HTML report")
-    f.add_argument("targets", nargs="+", metavar="TARGET",
+    f.add_argument("targets", nargs="*", metavar="TARGET",
                    help="an XML file holding a <bsdf>, or PLUGIN:key=value,... "
                         "(e.g. roughconductor:material=Au,alpha=0.3)")
+    f.add_argument("--scene", default=None, metavar="SCENE",
+                   help="instead of TARGETs: a scene file (or a bundled scene's name); every "
+                        "BSDF of it is replaced by the cheapest course model that looks the "
+                        "same in its renders, or kept with the reason; the simplified scene "
+                        "and its report are written to -o")
+    f.add_argument("-D", dest="defines", action="append", default=[], metavar="key=value",
+                   help="a parameter of the --scene file, as mitsuba -D (e.g. -D mode=hdr)")
     f.add_argument("-o", "--output", required=True,
                    help="report folder: new, empty, or a previous report")
     f.add_argument("--models", nargs="+", default=None, metavar="NAME",

@@ -17,7 +17,8 @@ count of its traced operations (:mod:`.cost`). The fits run through a
 ``fits.json``, ``fits.csv``, ``index.html`` and each fitted material as XML.
 :mod:`.effective` gives what the parameters mean (effective colours, albedo)
 and the target's features no course model has; :mod:`.trade` is the fixed
-sweep behind the "which model for which material" table.
+sweep behind the "which model for which material" table; :mod:`.scenefit`
+answers per scene (``mi-brdfs fit --scene``).
 
 Ngan, Durand & Matusik 2005, "Experimental Analysis of BRDF Models" (EGSR)
 fitted models to measured materials and ranked them; this is that, for the

@@ -54,7 +54,8 @@ def test_the_rungs_are_named_and_added_only_to_their_targets():
     assert added["diffuse:reflectance=0.5"] == []
     assert len(added["principled:base_color=[0.8,0.25,0.1],roughness=0.4,specular=0.5"]) == 2
     assert added["roughplastic:alpha=0.2,nonlinear=true"] == [
-        "cook_torrance/beckmann/smith/plastic/nonlinear", "cook_torrance/ggx/smith/plastic/nonlinear"]
+        "cook_torrance/beckmann/smith/plastic/nonlinear",
+        "cook_torrance/ggx/smith/plastic/nonlinear"]
 
 
 def au_f0() -> np.ndarray:
@@ -68,7 +69,8 @@ def au_f0() -> np.ndarray:
 def test_the_conductor_rung_fits_gold_far_better_than_schlick():
     _, prob = problem(AU)
     result = {name: optimise.fit_model(models.select([name])[0], prob, SETTINGS)
-              for name in ("cook_torrance/beckmann/smith", "cook_torrance/beckmann/smith/conductor")}
+              for name in ("cook_torrance/beckmann/smith",
+                           "cook_torrance/beckmann/smith/conductor")}
     schlick, exact = (result[n]["brdf_error"] for n in result)
     assert schlick > 0.05                                 # Schlick's F keeps its colour
     assert exact < 0.1 * schlick and exact < 0.01, (schlick, exact)

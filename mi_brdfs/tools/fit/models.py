@@ -77,7 +77,7 @@ class Model:
     name: str
     plugin: str
     options: tuple          # (name, value) pairs, energy_compensation included
-    held: tuple = ()        # (name, value) parameters not fitted: given as value, or not at all (None)
+    held: tuple = ()        # (name, value) not fitted: given as value, or not given (None)
     bounds: tuple = ()      # (name, lo, hi): a search range other than the declaration's
     curved: tuple = ()      # colour parameters eval is not linear in (scanned, not solved)
 

@@ -149,11 +149,11 @@ def rung_of(model: str) -> str | None:
     for a model on no rung (``+ec``, other G, other plugins)."""
     for d in ("ggx", "beckmann"):
         head = f"cook_torrance/{d}/smith"
-        if model == head:
-            return ""
-        if model.startswith(head + "/"):
-            rest = model[len(head):]
-            return "/plastic" if rest.startswith("/plastic") else rest
+        rest = model[len(head):] if model.startswith(head) else None
+        if rest in ("/plastic/nonlinear", "/plastic"):
+            return "/plastic"
+        if rest in [suffix for _, suffix in RUNG_COLUMNS]:
+            return rest
     return None
 
 
@@ -258,8 +258,7 @@ def summary(records: list[dict], labels: dict[str, str] | None = None) -> str:
                      f"none (closest: `{closest['model']}`, FLIP {rank.quality(closest):.3f})")
         lines.append(f"| {labels.get(spec, spec)} | `{best['model']}` | "
                      f"{rank.quality(best):.3f} | {cost} | {other} |")
-    return "\n".join(lines) + ("\n" + ladder(records, labels).rstrip("\n")
-                               if ladder(records, labels) else "")
+    return "\n".join(lines)
 
 
 def rebuild(folder: str, targets=TARGETS) -> list[dict]:

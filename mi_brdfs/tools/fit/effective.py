@@ -248,8 +248,9 @@ def describe(found: dict) -> list[str]:
     if w["present"]:
         out.append(f"its specular colour turns white towards grazing incidence (chroma "
                    f"{w['chroma_0']:.2f} at 0°, {w['chroma_80']:.2f} at 80°): a conductor's "
-                   "spectral Fresnel; no course model has it (Schlick's scalar f0 times a "
-                   "colour keeps that colour at every angle)")
+                   "spectral Fresnel; no model with the lecture's Fresnel has it (Schlick's "
+                   "scalar f0 times a colour keeps that colour at every angle); the rungs "
+                   "cook_torrance/<D>/smith/conductor and /f82 are fitted for it")
     a = found["anisotropy"]
     if a["present"]:
         extra = [name for name, _ in cases.every("anisotropic")]
@@ -263,7 +264,8 @@ KNOWN = {          # plugin: what it has that no course model has, as the fit gu
     "roughplastic": "it is a plastic: light refracted into its substrate scatters inside and "
                     "leaves through the Fresnel-transmitting coating (internal scattering), so "
                     "its diffuse layer is weighted by the coating's transmission at both "
-                    "directions; no course model has a coating over its diffuse layer",
+                    "directions; no model with the lecture's k-mix has a coating over its "
+                    "diffuse layer (the rung cook_torrance/<D>/smith/plastic is fitted for it)",
 }
 KNOWN["plastic"] = KNOWN["roughplastic"]
 

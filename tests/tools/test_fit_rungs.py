@@ -135,3 +135,12 @@ def test_the_trade_table_shows_the_rungs():
     assert rows["plastic"] == ["0.160 · 0.90× (0.81–0.99) (ggx)", "–", "–",
                                "0.008 · 1.40× (1.26–1.54) (beckmann)"]
     assert trade.ladder([r for r in records if r["model"].count("/") <= 2]) == ""
+    table = trade.table(records, {au: "Au", pl: "plastic"})
+    models_rows = [line.split("|")[1].strip() for line in table.splitlines()
+                   if line.startswith("| `")]
+    assert models_rows[:2] == ["`lambert`", "`cook_torrance/beckmann/smith`"]
+    assert models_rows[2:4] == ["`cook_torrance/beckmann/smith/conductor`",
+                                "`cook_torrance/beckmann/smith/plastic`"]
+    assert models_rows[4:] == ["`cook_torrance/ggx/smith`", "`cook_torrance/ggx/smith/f82`",
+                               "`cook_torrance/ggx/smith/conductor`"]
+    assert table.endswith(text)

@@ -144,3 +144,15 @@ def test_the_trade_table_shows_the_rungs():
     assert models_rows[4:] == ["`cook_torrance/ggx/smith`", "`cook_torrance/ggx/smith/f82`",
                                "`cook_torrance/ggx/smith/conductor`"]
     assert table.endswith(text)
+
+
+def test_an_xml_plastic_gets_the_plastic_rung_with_its_nonlinear(tmp_path):
+    path = tmp_path / "plastic.xml"
+    path.write_text('<bsdf type="roughplastic" version="3.0.0">\n'
+                    '    <boolean name="nonlinear" value="true"/>\n'
+                    '    <float name="alpha" value="0.2"/>\n</bsdf>\n')
+    found = effective.target_features(targets.parse([str(path)])[0], SETTINGS)
+    assert found["kind"] == {"conductor": False, "plastic": True, "nonlinear": True}
+    assert [m.name for m in effective.extended_models(found)] == [
+        "cook_torrance/ggx/smith/plastic/nonlinear",
+        "cook_torrance/beckmann/smith/plastic/nonlinear"]

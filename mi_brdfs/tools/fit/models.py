@@ -20,8 +20,16 @@ from the lecture's approximation to the physics it stands for:
 - ``cook_torrance/<D>/smith/conductor``: the exact conductor Fresnel, ``eta``
   in [0, 8] and ``kappa`` in [0, 10] per channel (every material of
   Mitsuba's ``data/ior`` lies inside: η ≤ 7.6, κ ≤ 9.3 in RGB), free and not
-  seeded from the target's data (what the fit finds is then the test of the
-  form), ``specular_reflectance`` held at 1 (the Fresnel carries the colour);
+  seeded from a ``roughconductor`` target's own data (a target given as XML
+  or a ``principled`` has none), but the scan adds every measured metal of
+  Mitsuba at the best candidate's roughness as a start (:func:`metal_starts`:
+  a target that is one of them starts from its own indices), ``specular_reflectance`` held at 1 (the Fresnel carries the colour);
+- both conductor rungs hold ``k`` at 0, as ``roughconductor``: a metal has no
+  diffuse lobe, and a negligible one (k·m_D ~ 1e-8, which the objective does
+  not see) lights pixels that are black in a conductor's render, which
+  HDR-FLIP, its exposures reaching 2^24 on such a render, counts as errors
+  (measured on gold at α 0.3: FLIP 0.128 with k·m_D ~ 5e-8, 0.022 in the
+  frontal view with k = 0);
 - ``cook_torrance/<D>/smith/plastic``: ``roughplastic``'s base under the exact
   dielectric Fresnel, ``int_ior`` in [1, 3] (``ext_ior`` held at air's: only
   the ratio counts), the diffuse and specular colours free;
@@ -80,6 +88,7 @@ class Model:
     held: tuple = ()        # (name, value) not fitted: given as value, or not given (None)
     bounds: tuple = ()      # (name, lo, hi): a search range other than the declaration's
     curved: tuple = ()      # colour parameters eval is not linear in (scanned, not solved)
+    metals: bool = False    # the scan also starts from Mitsuba's measured metals (:func:`metal_starts`)
 
     def properties(self) -> dict:
         return {"type": self.plugin, "mode": "hdr", **dict(self.options),
@@ -103,6 +112,7 @@ def all_models() -> list[Model]:
 RUNG_DISTRIBUTIONS = ("ggx", "beckmann")
 ETA_RANGE, KAPPA_RANGE, IOR_RANGE = (0.0, 8.0), (0.0, 10.0), (1.0, 3.0)
 CONDUCTOR_RUNGS, PLASTIC_RUNG = ("f82", "conductor"), "plastic"
+METAL = (("k", 0.0), ("diffuse_reflectance", None))     # the conductor rungs: no diffuse lobe
 
 
 def rung(distribution: str, form: str, nonlinear: bool = False) -> Model:
@@ -118,15 +128,44 @@ def rung(distribution: str, form: str, nonlinear: bool = False) -> Model:
                      curved=("diffuse_reflectance",) if nonlinear else ())
     if form == "conductor":
         return Model(base, "cook_torrance", opts + (("fresnel", "conductor"),),
-                     held=(("f0", None), ("specular_reflectance", 1.0)),
+                     held=(("f0", None), ("specular_reflectance", 1.0)) + METAL,
                      bounds=(("eta",) + ETA_RANGE, ("kappa",) + KAPPA_RANGE),
-                     curved=("eta", "kappa"))
+                     curved=("eta", "kappa"), metals=True)
     if form != "f82":
         raise ValueError(f"rung {form!r} is unknown; valid: f82, conductor, plastic")
     f0_colour = next(p for p in BY_NAME["cook_torrance"].PARAMS if p.name == "f0").kind != "float"
     return Model(base, "cook_torrance", opts + (("fresnel", "f82"),),
-                 held=(("specular_reflectance", 1.0),) if f0_colour else (),
+                 held=((("specular_reflectance", 1.0),) if f0_colour else ()) + METAL,
                  curved=("f82_tint", "f0") if f0_colour else ("f82_tint",))
+
+
+def metal_starts(alpha: float) -> list[dict]:
+    """More starts of the conductor rung (:func:`.optimise.fit_model`): (η, κ)
+    of every metal of Mitsuba's ``data/ior`` in the active variant's colours,
+    at roughness ``alpha`` (the best scanned candidate's). A target that is
+    one of these metals is then started from its own indices; the descent
+    still finds the roughness and refines the indices. The two indices trade against each other along
+    a valley of nearly equal reflectance (gold's red channel: η 0.14, κ 4.0
+    and η 0.8, κ 10 differ only towards grazing), and from a grey start the
+    descent can end on the far side of it at a bound."""
+    import mitsuba as mi
+    from ...bsdfs import cook_torrance as ct
+    key = mi.variant()
+    if key not in _METALS:
+        si = dr.zeros(mi.SurfaceInteraction3f)
+        found = []
+        for name in ct.materials():
+            eta, kappa = (np.array(t.eval(si), dtype=np.float64).ravel()
+                          for t in ct.material_textures(name))
+            if len(eta) == 3 and np.isfinite(eta).all() and np.isfinite(kappa).all():
+                found.append({"eta": [float(min(max(v, ETA_RANGE[0]), ETA_RANGE[1])) for v in eta],
+                              "kappa": [float(min(max(v, KAPPA_RANGE[0]), KAPPA_RANGE[1]))
+                                        for v in kappa]})
+        _METALS[key] = found
+    return [{**m, "alpha": alpha} for m in _METALS[key]]
+
+
+_METALS: dict = {}
 
 
 def rungs(conductor: bool = True, plastic: bool = True, nonlinear: bool = False) -> list[Model]:

@@ -315,6 +315,12 @@ def fit_model(model, prob: Problem, settings, log=None) -> dict:
         u = ev.coordinates(ev.colours_by_least_squares(shape), M.U_START)
         scanned.append((float(np.sum(ev.residuals(u) ** 2)), u))
     scanned.sort(key=lambda s: s[0] if math.isfinite(s[0]) else math.inf)
+    if model.metals and scanned:          # the measured metals at the best scan's roughness
+        alpha = M.values(ev.free, scanned[0][1]).get("alpha")
+        for start in M.metal_starts(alpha):
+            u = ev.coordinates(start, M.U_START)
+            scanned.append((float(np.sum(ev.residuals(u) ** 2)), u))
+        scanned.sort(key=lambda s: s[0] if math.isfinite(s[0]) else math.inf)
     results = []
     for _, u0 in scanned[:settings.starts]:
         u, evaluations = levenberg_marquardt(ev, u0, settings.steps)

@@ -27,9 +27,8 @@ from the lecture's approximation to the physics it stands for:
 - both conductor rungs hold ``k`` at 0, as ``roughconductor``: a metal has no
   diffuse lobe, and a negligible one (k·m_D ~ 1e-8, which the objective does
   not see) lights pixels that are black in a conductor's render, which
-  HDR-FLIP, its exposures reaching 2^24 on such a render, counts as errors
-  (measured on gold at α 0.3: FLIP 0.128 with k·m_D ~ 5e-8, 0.022 in the
-  frontal view with k = 0);
+  HDR-FLIP, whose exposures reach far above such a render's bright pixels,
+  counts as errors;
 - ``cook_torrance/<D>/smith/plastic``: ``roughplastic``'s base under the exact
   dielectric Fresnel, ``int_ior`` in [1, 3] (``ext_ior`` held at air's: only
   the ratio counts), the diffuse and specular colours free;

@@ -23,7 +23,8 @@ from the lecture's approximation to the physics it stands for:
   seeded from a ``roughconductor`` target's own data (a target given as XML
   or a ``principled`` has none), but the scan adds every measured metal of
   Mitsuba at the best candidate's roughness as a start (:func:`metal_starts`:
-  a target that is one of them starts from its own indices), ``specular_reflectance`` held at 1 (the Fresnel carries the colour);
+  a target that is one of them starts from its own indices),
+  ``specular_reflectance`` held at 1 (the Fresnel carries the colour);
 - both conductor rungs hold ``k`` at 0, as ``roughconductor``: a metal has no
   diffuse lobe, and a negligible one (k·m_D ~ 1e-8, which the objective does
   not see) lights pixels that are black in a conductor's render, which

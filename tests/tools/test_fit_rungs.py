@@ -58,16 +58,19 @@ def test_the_rungs_are_named_and_added_only_to_their_targets():
         "cook_torrance/ggx/smith/plastic/nonlinear"]
 
 
-def au_f0() -> np.ndarray:
-    """Gold's F0 per channel from roughconductor's own RGB indices, by the
+def target_f0(spec: str) -> np.ndarray:
+    """A roughconductor's F0 per channel from its own RGB indices, by the
     formula ((η - 1)² + κ²)/((η + 1)² + κ²), written here."""
-    p = mi.traverse(mi.load_dict({"type": "roughconductor", "material": "Au"}))
+    p = mi.traverse(targets.parse([spec])[0].load())
     eta, k = (np.array(p[key], dtype=float).ravel() for key in ("eta.value", "k.value"))
     return ((eta - 1) ** 2 + k ** 2) / ((eta + 1) ** 2 + k ** 2)
 
 
-def test_the_conductor_rung_fits_gold_far_better_than_schlick():
-    _, prob = problem(AU)
+# gold (one of the measured metals the scan starts from) and indices of no metal of Mitsuba's
+@pytest.mark.parametrize("spec, alpha", [
+    (AU, 0.3), ("roughconductor:eta=[0.5,0.8,1.1],k=[3.0,2.5,2.0],alpha=0.2", 0.2)])
+def test_the_conductor_rung_fits_a_coloured_conductor_far_better_than_schlick(spec, alpha):
+    _, prob = problem(spec)
     result = {name: optimise.fit_model(models.select([name])[0], prob, SETTINGS)
               for name in ("cook_torrance/beckmann/smith",
                            "cook_torrance/beckmann/smith/conductor")}
@@ -75,10 +78,10 @@ def test_the_conductor_rung_fits_gold_far_better_than_schlick():
     assert schlick > 0.05                                 # Schlick's F keeps its colour
     assert exact < 0.1 * schlick and exact < 0.01, (schlick, exact)
     p = result["cook_torrance/beckmann/smith/conductor"]["parameters"]
-    assert p["alpha"] == pytest.approx(0.3, rel=0.01)
+    assert p["alpha"] == pytest.approx(alpha, rel=0.01)
     eta, kappa = np.array(p["eta"]), np.array(p["kappa"])
     f0 = ((eta - 1) ** 2 + kappa ** 2) / ((eta + 1) ** 2 + kappa ** 2)
-    assert np.allclose(f0, au_f0(), atol=0.01), (f0, au_f0())
+    assert np.allclose(f0, target_f0(spec), atol=0.01), (f0, target_f0(spec))
 
 
 def test_the_plastic_rung_recovers_the_roughplastic():

@@ -57,10 +57,13 @@ def plugin_table() -> str:
 
 def which_model_table() -> str:
     """The README's table "which model for my material", from the committed
-    trade sweep."""
+    trade sweep, and what each rung buys and costs (:func:`.fit.trade.ladder`,
+    once the sweep has rung fits)."""
     with open(TRADE, encoding="utf-8") as f:
         records = json.load(f)
-    return trade.summary(records, dict((spec, label) for label, spec in trade.TARGETS))
+    labels = dict((spec, label) for label, spec in trade.TARGETS)
+    rungs = trade.ladder(records, labels)
+    return trade.summary(records, labels) + ("\n" + rungs.rstrip("\n") if rungs else "")
 
 
 TABLES = {"plugins": plugin_table, "which-model": which_model_table}   # README marker: its table

@@ -209,7 +209,7 @@ def test_shorthand_values():
 
 
 def test_models_cover_every_d_x_g_and_compensation():
-    names = models.names()
+    names = [m.name for m in models.all_models()]
     assert len([n for n in names if n.startswith("cook_torrance/")]) == 12
     for cls in __import__("mi_brdfs").PLUGINS:
         assert any(n.startswith(cls.name) for n in names)

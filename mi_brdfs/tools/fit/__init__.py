@@ -74,7 +74,8 @@ def fit(specs: list[str], out_dir: str, model_names: list[str] | None = None,
     client = sweep.connect(scheduler, timeout) if scheduler else None
     names = {m.name for m in chosen}
     tasks = [(t, m) for t in parsed
-             for m in chosen + [e for e in effective.extended_models(found[t.name])
+             for m in chosen + [e for e in effective.extended_models(found[t.name],
+                                                                     rungs=not model_names)
                                 if e.name not in names]]
     measuring = settings.render and settings.cost
     total = len(tasks) * (2 if measuring else 1)

@@ -31,9 +31,10 @@ import drjit as dr
 import mitsuba as mi
 
 from ..._jit import from_numpy
-from ...bsdfs import BY_NAME, cases
+from ...bsdfs import BY_NAME, cases, fresnel
 from ..analysis import eval_at_viewer
 from .metric import pairs
+from . import models as M
 from .models import Model
 from .optimise import eval_pairs
 
@@ -54,9 +55,53 @@ def parameters(plugin: str, p: dict) -> dict:
     ``specular_85`` (the specular colour at normal and 85° incidence), and
     ``notes`` on parameters that do not matter."""
     model = BY_NAME[plugin]
+    if plugin == "cook_torrance" and (p.get("fresnel", "schlick") != "schlick"
+                                      or p.get("base", "lambert") != "lambert"):
+        return rung_parameters(p)
     normal, grazing = (model.effective(p, math.cos(math.radians(a))) for a in (0.0, GRAZING_DEG))
     return {"diffuse": normal.diffuse, "specular_0": normal.specular,
             "specular_85": grazing.specular, "notes": list(normal.notes)}
+
+
+def _channels(value) -> list[float]:
+    return [float(c) for c in value] if isinstance(value, (list, tuple)) else [float(value)] * 3
+
+
+def rung_fresnel(p: dict, cos_theta: float) -> list[float]:
+    """F per channel of a ``cook_torrance`` rung's fitted parameters at
+    cos θ, by the plugin's own Fresnel forms (:mod:`mi_brdfs.bsdfs.fresnel`)."""
+    form, c = p.get("fresnel", "schlick"), float(cos_theta)
+    if form == "conductor":
+        value = fresnel.conductor(mi.Float(_channels(p["eta"])), mi.Float(_channels(p["kappa"])), c)
+    elif form == "f82":
+        value = fresnel.f82(mi.Float(_channels(p.get("f0", 0.04))),
+                            mi.Float(_channels(p.get("f82_tint", 1.0))), c)
+    elif form == "dielectric":
+        eta = float(p.get("int_ior", 1.49)) / float(p.get("ext_ior", 1.000277))
+        value = fresnel.dielectric(mi.Float([eta] * 3), c)
+    else:
+        value = fresnel.schlick(mi.Float(_channels(p.get("f0", 0.04))), c)
+    return [float(v) for v in np.array(value, dtype=np.float64).ravel()]
+
+
+def rung_parameters(p: dict) -> dict:
+    """:func:`parameters` of a ``cook_torrance`` with another Fresnel form or
+    base: the specular colour m_S·F(θ) (times 1 - k on the Lambert base); the
+    plastic base's diffuse colour is m_D, seen through the interface."""
+    plastic = p.get("base", "lambert") == "plastic"
+    k = 0.0 if plastic else float(p.get("k", 0.5))
+    m_s = _channels(p.get("specular_reflectance", 1.0))
+    spec = {a: [(1.0 - k) * s * f for s, f in zip(m_s, rung_fresnel(p, math.cos(math.radians(a))))]
+            for a in (0.0, GRAZING_DEG)}
+    notes = []
+    if plastic:
+        notes.append("base plastic: diffuse_reflectance is the substrate's, seen through "
+                     "the dielectric interface")
+    elif k < 1e-3:
+        notes.append(f"k = {k:.2g}: diffuse_reflectance has no effect")
+    diffuse = _channels(p.get("diffuse_reflectance", 0.5))
+    return {"diffuse": diffuse if plastic else [k * d for d in diffuse],
+            "specular_0": spec[0.0], "specular_85": spec[GRAZING_DEG], "notes": notes}
 
 
 def albedo(bsdf, angles=ALBEDO_ANGLES, samples: int = ALBEDO_SAMPLES, seed: int = 3) -> list:
@@ -146,13 +191,54 @@ def normal_colour(record: dict) -> list[float] | None:
 
 
 def target_features(target, settings) -> dict:
-    """:func:`features` of a :class:`.targets.Target` on the settings' metric pairs."""
+    """:func:`features` of a :class:`.targets.Target` on the settings' metric
+    pairs, with its ``kind`` (:func:`kind`)."""
     bsdf = target.load()
     try:
-        return features(bsdf, pairs(settings.metric, settings.viewers, settings.uniform,
-                                    settings.lobe))
+        found = features(bsdf, pairs(settings.metric, settings.viewers, settings.uniform,
+                                     settings.lobe))
     finally:
         del bsdf
+    found["kind"] = kind(target, found)
+    return found
+
+
+CONDUCTORS = ("roughconductor", "conductor")
+PLASTICS = ("roughplastic", "plastic")
+
+
+def target_props(target) -> dict:
+    """The target's plugin and its properties as given: a shorthand's, or the
+    XML's top ``<bsdf>`` type and its ``<boolean>``/``<float>`` children."""
+    if target.xml is None:
+        return dict(target.props)
+    import re
+    found = re.search(r'<bsdf[^>]*type="([^"]+)"', target.xml)
+    props = {"type": found.group(1) if found else None}
+    for tag, name, value in re.findall(r'<(boolean|float)\s+name="([^"]+)"\s+value="([^"]+)"',
+                                       target.xml):
+        try:
+            props.setdefault(name, value.lower() == "true" if tag == "boolean" else float(value))
+        except ValueError:
+            pass
+    return props
+
+
+def kind(target, found: dict) -> dict:
+    """Which rungs (:func:`.models.rungs`) a target is fitted with:
+    ``conductor`` for Mitsuba's conductors, a ``principled`` with any
+    ``metallic``, and any target whose specular colour whitens towards grazing
+    (:func:`features`); ``plastic`` for Mitsuba's plastics and a
+    ``principled`` that is not wholly metallic (a dielectric coat over a
+    diffuse body); ``nonlinear`` as a plastic target's own (default false)."""
+    props = target_props(target)
+    plugin = props.get("type")
+    metallic = float(props.get("metallic", 0.0)) if plugin == "principled" else 0.0
+    conductor = (plugin in CONDUCTORS or (plugin == "principled" and metallic > 0.0)
+                 or found["whitening"]["present"])
+    plastic = plugin in PLASTICS or (plugin == "principled" and metallic < 1.0)
+    return {"conductor": bool(conductor), "plastic": bool(plastic),
+            "nonlinear": bool(plastic and props.get("nonlinear", False) is True)}
 
 
 def describe(found: dict) -> list[str]:
@@ -162,8 +248,9 @@ def describe(found: dict) -> list[str]:
     if w["present"]:
         out.append(f"its specular colour turns white towards grazing incidence (chroma "
                    f"{w['chroma_0']:.2f} at 0°, {w['chroma_80']:.2f} at 80°): a conductor's "
-                   "spectral Fresnel; no course model has it (Schlick's scalar f0 times a "
-                   "colour keeps that colour at every angle)")
+                   "spectral Fresnel; no model with the lecture's Fresnel has it (Schlick's "
+                   "scalar f0 times a colour keeps that colour at every angle); the rungs "
+                   "cook_torrance/<D>/smith/conductor and /f82 are fitted for it")
     a = found["anisotropy"]
     if a["present"]:
         extra = [name for name, _ in cases.every("anisotropic")]
@@ -177,7 +264,8 @@ KNOWN = {          # plugin: what it has that no course model has, as the fit gu
     "roughplastic": "it is a plastic: light refracted into its substrate scatters inside and "
                     "leaves through the Fresnel-transmitting coating (internal scattering), so "
                     "its diffuse layer is weighted by the coating's transmission at both "
-                    "directions; no course model has a coating over its diffuse layer",
+                    "directions; no model with the lecture's k-mix has a coating over its "
+                    "diffuse layer (the rung cook_torrance/<D>/smith/plastic is fitted for it)",
 }
 KNOWN["plastic"] = KNOWN["roughplastic"]
 
@@ -188,12 +276,19 @@ def known_reasons(plugin: str) -> list[str]:
     return [KNOWN[plugin]] if plugin in KNOWN else []
 
 
-def extended_models(found: dict) -> list:
+def extended_models(found: dict, rungs: bool = True) -> list:
     """The course models' extended configurations worth fitting for the
     features found: for an anisotropic target, those the models declare
     (their cases' ``anisotropic``: ward and cook_torrance with alpha_u and
-    alpha_v)."""
-    if not found["anisotropy"]["present"]:
-        return []
-    return [Model(name, plugin, tuple(props.items()))
-            for plugin, declared in cases.ALL.items() for name, props in declared.anisotropic]
+    alpha_v); with ``rungs``, the rungs of its ``kind`` (:func:`kind`): F82
+    and the exact conductor Fresnel for a conductor, the plastic base for a
+    plastic (:func:`.models.rungs`, under GGX and Beckmann: 4 more models
+    for a conductor, 2 for a plastic)."""
+    out = []
+    if found["anisotropy"]["present"]:
+        out += [Model(name, plugin, tuple(props.items()))
+                for plugin, declared in cases.ALL.items() for name, props in declared.anisotropic]
+    k = found.get("kind")
+    if rungs and k and (k["conductor"] or k["plastic"]):
+        out += M.rungs(k["conductor"], k["plastic"], k["nonlinear"])
+    return out

@@ -10,6 +10,36 @@ change only how a model is computed or sampled (``sampling``,
 defaults. Names:
 ``lambert``, ``phong+ec``, ``cook_torrance/ggx/smith``, ... (:func:`names`).
 
+**Rungs** (:func:`rungs`): ``cook_torrance`` with Smith's G under GGX and
+Beckmann, one option away from the lecture's forms (issue 35), the steps
+from the lecture's approximation to the physics it stands for:
+
+- ``cook_torrance/<D>/smith/f82``: Hoffman's F82-tint (``f0``, ``f82_tint``
+  free; ``f0`` is one number while the plugin takes it as one, so
+  ``specular_reflectance`` stays free as the colour);
+- ``cook_torrance/<D>/smith/conductor``: the exact conductor Fresnel, ``eta``
+  in [0, 8] and ``kappa`` in [0, 10] per channel (every material of
+  Mitsuba's ``data/ior`` lies inside: η ≤ 7.6, κ ≤ 9.3 in RGB), free and not
+  seeded from a ``roughconductor`` target's own data (a target given as XML
+  or a ``principled`` has none), but the scan adds every measured metal of
+  Mitsuba at the best candidate's roughness as a start (:func:`metal_starts`:
+  a target that is one of them starts from its own indices),
+  ``specular_reflectance`` held at 1 (the Fresnel carries the colour);
+- both conductor rungs hold ``k`` at 0, as ``roughconductor``: a metal has no
+  diffuse lobe, and a negligible one (k·m_D ~ 1e-8, which the objective does
+  not see) lights pixels that are black in a conductor's render, which
+  HDR-FLIP, whose exposures reach far above such a render's bright pixels,
+  counts as errors;
+- ``cook_torrance/<D>/smith/plastic``: ``roughplastic``'s base under the exact
+  dielectric Fresnel, ``int_ior`` in [1, 3] (``ext_ior`` held at air's: only
+  the ratio counts), the diffuse and specular colours free;
+  ``.../plastic/nonlinear`` with ``nonlinear``.
+
+They are not in the default selection of every target (:func:`all_models`):
+the fit adds them to the targets they are for
+(:func:`.effective.extended_models`: the conductor rungs to conductors, the
+plastic rung to plastics), and ``--models`` names them.
+
 **Parameters.** A model's free parameters are those its plugin exposes in
 ``mi.traverse`` when loaded with its defaults (so optional alternatives stay
 out: Ward's anisotropic ``alpha_u``/``alpha_v``, toon's ramps), each with its
@@ -40,7 +70,7 @@ import numpy as np
 
 import drjit as dr
 
-from ...bsdfs import PLUGINS
+from ...bsdfs import BY_NAME, PLUGINS
 EXPONENT_MAX = 1e6        # exponents are searched up to here (a mirror-like lobe)
 U_MAX = 30.0              # coordinates stay within ±U_MAX (σ(-30) = 1e-13; σ(u) rounds to 1 in float32 from u = 17)
 U_START = 6.0             # a start "at a bound" is u = ±6 (0.25 % of the range inside it)
@@ -55,9 +85,14 @@ class Model:
     name: str
     plugin: str
     options: tuple          # (name, value) pairs, energy_compensation included
+    held: tuple = ()        # (name, value) not fitted: given as value, or not given (None)
+    bounds: tuple = ()      # (name, lo, hi): a search range other than the declaration's
+    curved: tuple = ()      # colour parameters eval is not linear in (scanned, not solved)
+    metals: bool = False    # the scan also starts from Mitsuba's measured metals (:func:`metal_starts`)
 
     def properties(self) -> dict:
-        return {"type": self.plugin, "mode": "hdr", **dict(self.options)}
+        return {"type": self.plugin, "mode": "hdr", **dict(self.options),
+                **{k: v for k, v in self.held if v is not None}}
 
 
 def all_models() -> list[Model]:
@@ -74,17 +109,97 @@ def all_models() -> list[Model]:
     return out
 
 
+RUNG_DISTRIBUTIONS = ("ggx", "beckmann")
+ETA_RANGE, KAPPA_RANGE, IOR_RANGE = (0.0, 8.0), (0.0, 10.0), (1.0, 3.0)
+CONDUCTOR_RUNGS, PLASTIC_RUNG = ("f82", "conductor"), "plastic"
+METAL = (("k", 0.0), ("diffuse_reflectance", None))     # the conductor rungs: no diffuse lobe
+
+
+def rung(distribution: str, form: str, nonlinear: bool = False) -> Model:
+    """One rung (module docstring): ``form`` "f82", "conductor" or "plastic"."""
+    base = f"cook_torrance/{distribution}/smith/{form}"
+    opts = (("distribution", distribution), ("geometry", "smith"))
+    if form == PLASTIC_RUNG:
+        return Model(base + ("/nonlinear" if nonlinear else ""), "cook_torrance",
+                     opts + (("fresnel", "dielectric"), ("base", "plastic"),
+                             ("nonlinear", bool(nonlinear))),
+                     held=(("k", None), ("f0", None), ("ext_ior", None)),
+                     bounds=(("int_ior",) + IOR_RANGE,),
+                     curved=("diffuse_reflectance",) if nonlinear else ())
+    if form == "conductor":
+        return Model(base, "cook_torrance", opts + (("fresnel", "conductor"),),
+                     held=(("f0", None), ("specular_reflectance", 1.0)) + METAL,
+                     bounds=(("eta",) + ETA_RANGE, ("kappa",) + KAPPA_RANGE),
+                     curved=("eta", "kappa"), metals=True)
+    if form != "f82":
+        raise ValueError(f"rung {form!r} is unknown; valid: f82, conductor, plastic")
+    f0_colour = next(p for p in BY_NAME["cook_torrance"].PARAMS if p.name == "f0").kind != "float"
+    return Model(base, "cook_torrance", opts + (("fresnel", "f82"),),
+                 held=((("specular_reflectance", 1.0),) if f0_colour else ()) + METAL,
+                 curved=("f82_tint", "f0") if f0_colour else ("f82_tint",))
+
+
+def metal_starts(alpha: float) -> list[dict]:
+    """More starts of the conductor rung (:func:`.optimise.fit_model`): (η, κ)
+    of every metal of Mitsuba's ``data/ior`` in the active variant's colours,
+    at roughness ``alpha`` (the best scanned candidate's). A target that is
+    one of these metals is then started from its own indices; the descent
+    still finds the roughness and refines the indices. The two indices trade against each other along
+    a valley of nearly equal reflectance (gold's red channel: η 0.14, κ 4.0
+    and η 0.8, κ 10 differ only towards grazing), and from a grey start the
+    descent can end on the far side of it at a bound."""
+    import mitsuba as mi
+    from ...bsdfs import cook_torrance as ct
+    key = mi.variant()
+    if key not in _METALS:
+        si = dr.zeros(mi.SurfaceInteraction3f)
+        found = []
+        for name in ct.materials():
+            eta, kappa = (np.array(t.eval(si), dtype=np.float64).ravel()
+                          for t in ct.material_textures(name))
+            if len(eta) == 3 and np.isfinite(eta).all() and np.isfinite(kappa).all():
+                found.append({"eta": [float(min(max(v, ETA_RANGE[0]), ETA_RANGE[1])) for v in eta],
+                              "kappa": [float(min(max(v, KAPPA_RANGE[0]), KAPPA_RANGE[1]))
+                                        for v in kappa]})
+        _METALS[key] = found
+    return [{**m, "alpha": alpha} for m in _METALS[key]]
+
+
+_METALS: dict = {}
+
+
+def rungs(conductor: bool = True, plastic: bool = True, nonlinear: bool = False) -> list[Model]:
+    """The rungs for a conductor-like target, a plastic-like one, or both."""
+    forms = (CONDUCTOR_RUNGS if conductor else ()) + ((PLASTIC_RUNG,) if plastic else ())
+    return [rung(d, f, nonlinear) for f in forms for d in RUNG_DISTRIBUTIONS]
+
+
+def known_models() -> list[Model]:
+    """Every model a name may ask for: :func:`all_models`, each rung placed
+    after the Schlick model of its distribution (``cook_torrance/<D>/smith+ec``),
+    the plastic rung with and without ``nonlinear``."""
+    extra = rungs() + [rung(d, PLASTIC_RUNG, True) for d in RUNG_DISTRIBUTIONS]
+    out = []
+    for m in all_models():
+        out.append(m)
+        for d in RUNG_DISTRIBUTIONS:
+            if m.name == f"cook_torrance/{d}/smith{EC}":
+                out += [r for r in extra if r.name.startswith(f"cook_torrance/{d}/smith/")]
+    return out
+
+
 def names() -> list[str]:
-    return [m.name for m in all_models()]
+    return [m.name for m in known_models()]
 
 
 def select(wanted: list[str] | None) -> list[Model]:
-    """The models named: a model's name, or a plugin's name that is no model's
-    (``cook_torrance``, ``toon``: all its models); ValueError naming the
-    unknown one and the valid names."""
-    models = all_models()
+    """The models named: a model's name (a rung's too), or a plugin's name
+    that is no model's (``cook_torrance``, ``toon``: all its models, the
+    rungs included); ValueError naming the unknown one and the valid names.
+    None: :func:`all_models` (the rungs are added per target)."""
     if not wanted:
-        return models
+        return all_models()
+    models = known_models()
     chosen: list[Model] = []
     for w in wanted:
         found = [m for m in models if m.name == w] or [m for m in models if m.plugin == w]
@@ -111,6 +226,12 @@ class Free:
     lo: float
     hi: float
     log_start: bool = False  # starts spread on a log scale (roughnesses, exponents)
+    linear: bool = True      # a colour eval is linear in (solved by least squares; else scanned)
+
+    @property
+    def scanned(self) -> bool:
+        """Searched by the scan's candidates (a shape, or a colour eval is not linear in)."""
+        return not self.colour or not self.linear
 
     def value(self, u):
         """Coordinate(s) u -> parameter value (Dr.Jit or NumPy)."""
@@ -144,21 +265,29 @@ def logistic(u):
     return dr.rcp(1.0 + dr.exp(-u))
 
 
-def free_parameters(plugin_cls, traversed: list[str]) -> list[Free]:
-    """The Free parameters of a plugin instance whose traverse keys are ``traversed``."""
+def free_parameters(plugin_cls, traversed: list[str], model: Model | None = None) -> list[Free]:
+    """The Free parameters of a plugin instance whose traverse keys are
+    ``traversed``; a ``model``'s held parameters left out, its bounds and
+    curved colours applied."""
     declared = {p.name: p for p in plugin_cls.PARAMS}
+    held = {k for k, _ in model.held} if model else set()
+    bounds = {b[0]: b[1:] for b in model.bounds} if model else {}
+    curved = set(model.curved) if model else set()
     out = []
     for key in traversed:
         name = key.split(".")[0]
         p = declared.get(name)
-        if p is None:
+        if p is None or name in held:
             continue
         lo = p.lo if p.lo is not None else -1.0
         hi = p.probe_hi()
         log_start = p.role == "shape" and lo == 0.0
         if log_start and hi > 10.0:
             hi = min(hi, EXPONENT_MAX)
-        out.append(Free(name, key, p.kind == "spectrum", lo, hi, log_start))
+        lo, hi = bounds.get(name, (lo, hi))
+        log_start = log_start and lo == 0.0
+        out.append(Free(name, key, p.kind == "spectrum", lo, hi, log_start,
+                        linear=name not in curved))
     return out
 
 

@@ -17,7 +17,9 @@ gradient never vanishes at a bound), in two stages:
    but ``oren_nayar+ec``, whose multiple scattering is not: there it is a
    start), so each candidate's colours are solved exactly by bounded linear
    least squares on the pairs' values (one ``eval`` per colour parameter),
-   and the candidate is scored by the objective.
+   and the candidate is scored by the objective. A rung's colours that eval
+   is not linear in (``eta``, ``kappa``, ``f82_tint``: :mod:`.models`) are
+   scanned with the shapes, as greys.
 2. **Descent.** The ``starts`` best candidates are refined by
    Levenberg-Marquardt (:func:`levenberg_marquardt`) on the residuals of the
    objective, their Jacobian in u by Dr.Jit's forward-mode AD, every
@@ -125,13 +127,16 @@ class Evaluator:
         self.model, self.prob = model, prob
         self.cls = BY_NAME[model.plugin]
         probe = mi.load_dict(model.properties())
-        self.free = M.free_parameters(self.cls, list(mi.traverse(probe).keys()))
+        self.free = M.free_parameters(self.cls, list(mi.traverse(probe).keys()), model)
         del probe
         # Colours given as RGB, so that traverse exposes them as colours.
         grey = {f.name: [0.5, 0.5, 0.5] for f in self.free if f.colour}
         self.bsdf = mi.load_dict(M.load_dict({**model.properties(), **grey}))
         self.params = mi.traverse(self.bsdf)
         self.size = sum(3 if f.colour else 1 for f in self.free)
+        # base="plastic": the interface's tables are computed in NumPy when a
+        # parameter changes, so AD misses their part of the derivatives
+        self.numeric = dict(model.options).get("base") == "plastic"
 
     def set(self, values: dict) -> None:
         """Set parameter values ({name: float or 3 floats}) as opaque variables."""
@@ -161,7 +166,11 @@ class Evaluator:
 
     def jacobian(self, u: np.ndarray) -> np.ndarray:
         """d residuals / d u by Dr.Jit's forward-mode AD: one traced eval, then
-        one forward pass per coordinate through the recorded graph."""
+        one forward pass per coordinate through the recorded graph (by forward
+        differences where the model is not differentiable throughout:
+        :attr:`numeric`)."""
+        if self.numeric:
+            return self.differences(u)
         coords = [dr.opaque(mi.Float, float(x)) for x in u]
         for c in coords:
             dr.enable_grad(c)
@@ -188,10 +197,22 @@ class Evaluator:
         j = np.stack(columns, axis=1)
         return np.where(np.isfinite(j), j, 0.0)
 
+    def differences(self, u: np.ndarray, step: float = 1e-3) -> np.ndarray:
+        """d residuals / d u by forward differences of ``step`` in u."""
+        r = self.residuals(u)
+        columns = []
+        for i in range(len(u)):
+            moved = np.array(u, dtype=np.float64)
+            moved[i] += step if moved[i] + step <= M.U_MAX else -step
+            columns.append((self.residuals(moved) - r) / (moved[i] - u[i]))
+        j = np.stack(columns, axis=1)
+        return np.where(np.isfinite(j), j, 0.0)
+
     def colours_by_least_squares(self, shape: dict) -> dict:
         """The colours that fit best (bounded linear least squares, per channel,
-        on the eval values weighted as shown) with the other parameters at ``shape``."""
-        colours = [f for f in self.free if f.colour]
+        on the eval values weighted as shown) with the other parameters at
+        ``shape`` (the colours eval is linear in; the others are in ``shape``)."""
+        colours = [f for f in self.free if f.colour and f.linear]
         if not colours:
             return dict(shape)
         basis = []
@@ -219,18 +240,20 @@ class Evaluator:
 
 
 def candidates(ev: Evaluator, count: int) -> list[dict]:
-    """Values of the non-colour parameters to scan (module docstring, stage 1)."""
-    shape = [f for f in ev.free if not f.colour]
+    """Values of the scanned parameters (module docstring, stage 1): the
+    shapes, and the colours eval is not linear in (a rung's ``eta``, as a grey)."""
+    shape = [f for f in ev.free if f.scanned]
+    grey = lambda f, v: [float(v)] * 3 if f.colour else float(v)
     defaults = {p.name: p.default for p in ev.cls.PARAMS}
-    out = [{f.name: defaults[f.name] for f in shape}]
+    out = [{f.name: grey(f, min(max(defaults[f.name], f.lo), f.hi)) for f in shape}]
     edge = lambda f, end: f.value(-M.U_START if end == "lo" else M.U_START)
     if shape:
-        out += [{f.name: float(edge(f, end)) for f in shape} for end in ("lo", "hi")]
+        out += [{f.name: grey(f, edge(f, end)) for f in shape} for end in ("lo", "hi")]
     n = count - len(out)
     if n > 0 and shape:
         rng = np.random.default_rng(len(shape))
         grid = np.stack([(rng.permutation(n) + rng.random(n)) / n for _ in shape], axis=1)
-        out += [{f.name: f.spread(s) for f, s in zip(shape, row)} for row in grid]
+        out += [{f.name: grey(f, f.spread(s)) for f, s in zip(shape, row)} for row in grid]
     return out
 
 
@@ -292,6 +315,12 @@ def fit_model(model, prob: Problem, settings, log=None) -> dict:
         u = ev.coordinates(ev.colours_by_least_squares(shape), M.U_START)
         scanned.append((float(np.sum(ev.residuals(u) ** 2)), u))
     scanned.sort(key=lambda s: s[0] if math.isfinite(s[0]) else math.inf)
+    if model.metals and scanned:          # the measured metals at the best scan's roughness
+        alpha = M.values(ev.free, scanned[0][1]).get("alpha")
+        for start in M.metal_starts(alpha):
+            u = ev.coordinates(start, M.U_START)
+            scanned.append((float(np.sum(ev.residuals(u) ** 2)), u))
+        scanned.sort(key=lambda s: s[0] if math.isfinite(s[0]) else math.inf)
     results = []
     for _, u0 in scanned[:settings.starts]:
         u, evaluations = levenberg_marquardt(ev, u0, settings.steps)

@@ -126,7 +126,62 @@ def table(records: list[dict], labels: dict[str, str] | None = None) -> str:
             text = (f"{flip:.2f} · " if flip is not None else "") + f"{r['brdf_error']:.3f}"
             row.append(f"**{text}**" if first.get(s) == id(r) else text)
         lines.append("| " + " | ".join(row) + " |")
-    return "\n".join(lines) + "\n\n" + answers(records, labels)
+    return "\n".join(lines) + "\n\n" + answers(records, labels) + ladder(records, labels)
+
+
+RUNG_COLUMNS = (      # (heading, the model's name after cook_torrance/<D>/smith)
+    ("lecture's form (Schlick, k-mix)", ""),
+    ("F82-tint", "/f82"),
+    ("exact conductor F", "/conductor"),
+    ("plastic base", "/plastic"),
+)
+LADDER_CAPTION = ("The rungs: `cook_torrance` with Smith's G, from the lecture's form (Schlick's "
+                  "F, the k-weighted Lambert) one option at a time to the physics it stands "
+                  "for: Hoffman's F82-tint and the exact conductor Fresnel for a conductor, "
+                  "roughplastic's base under the exact dielectric Fresnel for a plastic. Each "
+                  "cell: the image FLIP against the material, then the cost × the material's "
+                  "own (90 % interval), of the better of GGX and Beckmann (by FLIP); – where "
+                  "the rung was not fitted.")
+
+
+def rung_of(model: str) -> str | None:
+    """The ladder's column suffix of a model (:data:`RUNG_COLUMNS`), None
+    for a model on no rung (``+ec``, other G, other plugins)."""
+    for d in ("ggx", "beckmann"):
+        head = f"cook_torrance/{d}/smith"
+        rest = model[len(head):] if model.startswith(head) else None
+        if rest in ("/plastic/nonlinear", "/plastic"):
+            return "/plastic"
+        if rest in [suffix for _, suffix in RUNG_COLUMNS]:
+            return rest
+    return None
+
+
+def ladder(records: list[dict], labels: dict[str, str] | None = None) -> str:
+    """Per material fitted with a rung beyond the lecture's form: each rung's
+    FLIP and cost (:data:`LADDER_CAPTION`); empty if no material was."""
+    labels = labels or {}
+    fitted = [r for r in rank.ok(records) if rung_of(r["model"]) is not None]
+    specs = [s for s in dict.fromkeys(r["target"] for r in fitted)
+             if any(rung_of(r["model"]) and r["target"] == s for r in fitted)]
+    if not specs:
+        return ""
+    columns = [(h, suffix) for h, suffix in RUNG_COLUMNS
+               if any(rung_of(r["model"]) == suffix for r in fitted if r["target"] in specs)]
+    lines = ["| material | " + " | ".join(h for h, _ in columns) + " |",
+             "|---|" + "---|" * len(columns)]
+    for spec in specs:
+        row = [labels.get(spec, spec)]
+        for _, suffix in columns:
+            mine = [r for r in fitted if r["target"] == spec and rung_of(r["model"]) == suffix]
+            if not mine:
+                row.append("–")
+                continue
+            best = min(mine, key=rank.quality)
+            cost = "" if best.get("cost_ratio") is None else f" · {rank.cost_text(best)}"
+            row.append(f"{rank.quality(best):.3f}{cost} ({best['model'].split('/')[1]})")
+        lines.append("| " + " | ".join(row) + " |")
+    return "\n" + LADDER_CAPTION + "\n\n" + "\n".join(lines) + "\n"
 
 
 def answers(records: list[dict], labels: dict[str, str] | None = None) -> str:

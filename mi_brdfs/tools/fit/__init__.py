@@ -30,7 +30,7 @@ import sys
 import time
 
 from .. import compare, destinations
-from . import cost, effective, metric, models, report, sweep, targets
+from . import cost, effective, metric, models, report, sweep, targets, work
 from .task import FULL, QUICK, Settings
 
 __all__ = ["fit", "FULL", "QUICK", "Settings", "metric", "models", "targets"]
@@ -78,9 +78,11 @@ def fit(specs: list[str], out_dir: str, model_names: list[str] | None = None,
     measuring = settings.render and settings.cost
     total = len(tasks) * (2 if measuring else 1)
     start = time.perf_counter()
+    works = {t.name: prepared(t, settings) for t in parsed}
     try:
         records = sweep.run_fits(tasks, settings, jobs=jobs, scheduler=scheduler, show=show,
-                                 client=client, worker_timeout=timeout, total=total, start=start)
+                                 client=client, worker_timeout=timeout, total=total, start=start,
+                                 works=works)
     finally:
         if client is not None:
             client.close()
@@ -94,6 +96,15 @@ def fit(specs: list[str], out_dir: str, model_names: list[str] | None = None,
     for r in records:
         r.pop("images", None)
     return records
+
+
+def prepared(target, settings: Settings):
+    """The target's :class:`.work.TargetWork`, once for all its fits; None if
+    it fails (each task then tries again and records the error)."""
+    try:
+        return work.prepare(target, settings)
+    except Exception:                  # the tasks report it, one record each
+        return None
 
 
 def report_path(out_dir: str) -> str:

@@ -131,9 +131,11 @@ def lost_workers(client, key) -> int:
 
 
 def dask_sweep(client, address: str, tasks: list, settings: Settings, collect,
-               worker_timeout: float = WORKER_TIMEOUT) -> None:
+               worker_timeout: float = WORKER_TIMEOUT, works: dict | None = None) -> None:
     """Every task on the cluster; ``collect(i, record)`` as each finishes."""
-    futures = [client.submit(fit_and_measure, t, m, settings, pure=False) for t, m in tasks]
+    works = works or {}
+    futures = [client.submit(fit_and_measure, t, m, settings, works.get(t.name), pure=False)
+               for t, m in tasks]
     pending = dict(enumerate(futures))
     alone_since = None
     try:
@@ -175,8 +177,11 @@ def failed(task, message: str) -> dict:
     return {"target": t.spec, "model": m.name, "plugin": m.plugin, "error": message}
 
 
-def local_sweep(executor: cf.Executor, tasks: list, settings: Settings, collect) -> None:
-    futures = {executor.submit(fit_and_measure, t, m, settings): i for i, (t, m) in enumerate(tasks)}
+def local_sweep(executor: cf.Executor, tasks: list, settings: Settings, collect,
+                works: dict | None = None) -> None:
+    works = works or {}
+    futures = {executor.submit(fit_and_measure, t, m, settings, works.get(t.name)): i
+               for i, (t, m) in enumerate(tasks)}
     try:
         for future in cf.as_completed(futures):
             i = futures[future]
@@ -194,12 +199,13 @@ def local_sweep(executor: cf.Executor, tasks: list, settings: Settings, collect)
 def run_fits(tasks: list[tuple[T.Target, M.Model]], settings: Settings, jobs: int = 1,
              scheduler: str | None = None, show=None, client=None,
              worker_timeout: float = WORKER_TIMEOUT, total: int | None = None,
-             start: float | None = None) -> list[dict]:
+             start: float | None = None, works: dict | None = None) -> list[dict]:
     """Every (target, model) task, on local processes or on the Dask scheduler
     at ``scheduler`` (``client``: one already connected); records in task
     order. ``show(done, total, elapsed, record)`` after each task (``total``:
     the steps of the whole run, if more than the fits; ``start``: its
-    ``time.perf_counter()`` at the start of the run)."""
+    ``time.perf_counter()`` at the start of the run; ``works``: target name:
+    its :class:`.work.TargetWork`, handed to each of its tasks)."""
     records: list[dict | None] = [None] * len(tasks)
     start = time.perf_counter() if start is None else start
 
@@ -214,13 +220,13 @@ def run_fits(tasks: list[tuple[T.Target, M.Model]], settings: Settings, jobs: in
         own = client is None
         client = client or connect(scheduler, worker_timeout)
         try:
-            dask_sweep(client, scheduler, tasks, settings, collect, worker_timeout)
+            dask_sweep(client, scheduler, tasks, settings, collect, worker_timeout, works)
         finally:
             if own:
                 client.close()
     else:
         with local_executor(jobs) as executor:
-            local_sweep(executor, tasks, settings, collect)
+            local_sweep(executor, tasks, settings, collect, works)
     return [r for r in records if r is not None]
 
 

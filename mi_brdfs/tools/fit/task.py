@@ -24,7 +24,8 @@ from .. import compare
 from ..analysis import eval_at_viewer
 from ..errors import one_line
 from ..settings import Settings as SettingsBase
-from . import effective, metric, models as M, optimise, scene
+from . import effective, models as M, optimise, scene
+from .work import prepare
 
 SLICE_ANGLES = (0.0, 30.0, 60.0, 80.0)     # viewer angles of the lobe slices (degrees)
 SLICE_POINTS = 181
@@ -66,11 +67,12 @@ def slices(bsdf) -> list[list[list[float]]]:
 #  One task
 # ----------------------------------------------------------------------------
 
-def fit_and_measure(target, model, settings: Settings, pairs=None) -> dict:
-    """Fit ``model`` to ``target`` (a :class:`.targets.Target`) and measure it.
+def fit_and_measure(target, model, settings: Settings, work=None) -> dict:
+    """Fit ``model`` to ``target`` (a :class:`.targets.Target`) and measure it;
+    ``work``: the target's :class:`.work.TargetWork` (computed here if None).
     Never raises: a failure is returned as a record with an ``error`` message."""
     try:
-        return _fit_and_measure(target, model, settings, pairs)
+        return _fit_and_measure(target, model, settings, work)
     except Exception as error:                     # reported in the record, not lost
         return {"target": target.spec, "model": model.name, "plugin": model.plugin,
                 "error": one_line(error), "traceback": traceback.format_exc(),
@@ -82,20 +84,16 @@ def worker_name() -> str:
     return f"{socket.gethostname()}:{os.getpid()}"
 
 
-def _fit_and_measure(target, model, settings: Settings, pairs) -> dict:
+def _fit_and_measure(target, model, settings: Settings, work) -> dict:
     if mi.variant() != "llvm_ad_rgb":
         mi.set_variant("llvm_ad_rgb")
         mi_brdfs.register()
     start = time.perf_counter()
-    if pairs is None:
-        pairs = metric.pairs(settings.metric, settings.viewers, settings.uniform, settings.lobe)
-    target_bsdf = target.load()
-    prob = optimise.problem(target_bsdf, pairs, settings.objective)
+    if work is None:
+        work = prepare(target, settings)
+    prob = optimise.problem_from_values(work.values, work.pairs, settings.objective)
     if not prob.norm > 0:
         raise ValueError(f"target {target.spec} reflects no light at the metric's pairs")
-    target_slices = slices(target_bsdf)
-    target_albedo = effective.albedo(target_bsdf)
-    del target_bsdf
     fit = optimise.fit_model(model, prob, settings)
     fitted = mi.load_dict(M.load_dict(fit["parameters"]))
     model_slices = slices(fitted)
@@ -109,30 +107,34 @@ def _fit_and_measure(target, model, settings: Settings, pairs) -> dict:
               "image_noise_flip": None, "cost_ratio": None, "cost_low": None,
               "cost_high": None, "ops_ratio": None,
               "effective": effective.parameters(model.plugin, fit["parameters"]),
-              "albedo": model_albedo, "target_albedo": target_albedo,
+              "albedo": model_albedo, "target_albedo": work.albedo,
               "starts": fit["starts"], "worker": worker_name(),
-              "slices": {"angles": list(SLICE_ANGLES), "target": target_slices,
+              "slices": {"angles": list(SLICE_ANGLES), "target": work.slices,
                          "model": model_slices}}
     if settings.render:
         scene.release()
-        record.update(images(target, fit["parameters"], settings))
+        record.update(images(target, fit["parameters"], settings, work))
     record["seconds"] = time.perf_counter() - start
     return record
 
 
-def images(target, properties: dict, settings: Settings) -> dict:
+def images(target, properties: dict, settings: Settings, work=None) -> dict:
     """The fitted model's renders against the target's in every view: FLIP
-    and relMSE over the sphere's pixels per view, and their means."""
+    and relMSE over the sphere's pixels per view, and their means (the
+    target's renders and noise floor from ``work``, or rendered here)."""
     mask = scene.sphere_mask(settings.res)
-    reference = scene.target_views(target, settings.res, settings.spp, seed=0)
-    again = scene.target_views(target, settings.res, settings.spp, seed=1)
+    if work is None or work.reference is None:
+        from .work import noise_floor
+        reference = scene.target_views(target, settings.res, settings.spp, seed=0)
+        again = scene.target_views(target, settings.res, settings.spp, seed=1)
+        noise = noise_floor(reference, again, settings.res)
+    else:
+        reference, noise = work.reference, work.noise
     model = scene.render_views(lambda: M.load_dict(properties), settings.res, settings.spp, 0)
-    views, noise = {}, {}
+    views = {}
     for view in scene.VIEWS:
         m = compare.metrics(reference[view], model[view], flip_mode="hdr", mask=mask)
-        n = compare.metrics(reference[view], again[view], flip_mode="hdr", mask=mask)
         views[view] = {"flip": m["flip"], "relmse": m["relmse"]}
-        noise[view] = {"flip": n["flip"], "relmse": n["relmse"]}
     mean = lambda d, k: float(np.mean([v[k] for v in d.values()]))
     return {"image_flip": mean(views, "flip"), "image_relmse": mean(views, "relmse"),
             "image_noise_flip": mean(noise, "flip"), "image_noise_relmse": mean(noise, "relmse"),

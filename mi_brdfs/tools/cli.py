@@ -179,7 +179,7 @@ COMPARE_LIMITS = {
 # extra to import: the parser of every command must not)
 BENCH_GROUPS = ("builtin", "models", "oren_nayar", "sampling", "integrators", "convergence",
                 "scaling", "lobes", "energy", "materials", "frozen", "kernels", "tracing",
-                "explore", "trade")
+                "explore", "trade", "fit")
 
 
 def parser() -> Parser:

@@ -76,7 +76,7 @@ def fit(specs: list[str], out_dir: str, model_names: list[str] | None = None,
              for m in chosen + [e for e in effective.extended_models(found[t.name])
                                 if e.name not in names]]
     measuring = settings.render and settings.cost
-    total = len(tasks) * (2 if measuring else 1)
+    total = len(tasks)                 # models fitted, then models timed (show: per phase)
     start = time.perf_counter()
     works = {t.name: prepared(t, settings) for t in parsed}
     try:
@@ -87,8 +87,7 @@ def fit(specs: list[str], out_dir: str, model_names: list[str] | None = None,
         if client is not None:
             client.close()
     if measuring:
-        cost.measure_all(parsed, records, settings, show, offset=len(tasks), total=total,
-                         start=start)
+        cost.measure_all(parsed, records, settings, show, total=total, start=start)
     with destinations.report_dir(out_dir, "fit", files) as tmp:
         records = report.write(tmp, records, settings, command, found)
         if also:

@@ -230,18 +230,43 @@ def run_fits(tasks: list[tuple[T.Target, M.Model]], settings: Settings, jobs: in
     return [r for r in records if r is not None]
 
 
+PHASES = {"fit": "fitted", "cost": "cost timed"}
+
+
+def phase(record: dict) -> str:
+    """Which step of a fit a finished record closes: ``fit`` or ``cost``."""
+    return "cost" if "cost_rounds" in record or "cost_error" in record else "fit"
+
+
 def progress_printer(label: str, stream=None, enabled: bool = True, verbose: bool = False):
-    """``show`` for :func:`run_fits` and the cost measurements (a step: one fit,
-    or one model's cost): a bar on a terminal, plain lines in a log."""
-    bar = Progress(label, stream=stream, enabled=enabled, unit="steps")
+    """``show(done, total, elapsed, record)`` for :func:`run_fits` and the
+    cost measurements (``done`` of ``total`` models in the record's phase,
+    :func:`phase`): a bar per phase on a terminal ("LABEL (fitted): 3/24
+    models", the time left from the models after the first, which also
+    starts the worker), plain lines in a log; each finished model's
+    :func:`summary` with ``verbose`` or in a log."""
     out = stream if stream is not None else sys.stderr
+    state = {"phase": None, "bar": None, "start": 0.0}
 
     def show(done: int, total: int, elapsed: float, record: dict) -> None:
+        now = phase(record)
+        if now != state["phase"]:
+            if state["bar"] is not None:
+                state["bar"].close()
+            state.update(phase=now, start=state.get("last", 0.0),       # the phase's start
+                         bar=Progress(f"{label} ({PHASES[now]})", stream=stream,
+                                      enabled=enabled, unit="models"))
+        state["last"] = elapsed
+        bar = state["bar"]
         if enabled and (verbose or not bar.terminal):
             out.write(f"{label}: {summary(record)}\n")
             out.flush()
-        bar(done, total, elapsed)
-    show.close = bar.close
+        bar(done, total, max(elapsed - state["start"], 0.0))
+
+    def close() -> None:
+        if state["bar"] is not None:
+            state["bar"].close()
+    show.close = close
     return show
 
 

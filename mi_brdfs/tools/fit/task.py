@@ -46,8 +46,9 @@ class Settings(SettingsBase):
     spp: int = 64
     render: bool = True                      # renders and image errors (else: the fit only)
     cost: bool = True                        # render cost (mi_brdfs.tools.fit.cost)
-    cost_rounds: tuple[int, int] = (6, 40)   # cost: at least, at most this many rounds
+    cost_rounds: tuple[int, int] = (4, 20)   # cost: at least, at most this many rounds
     cost_tolerance: float = 0.05             # cost: until the 90 % interval's high/low <= 1.05
+    cost_timing: str = "cpu"                 # cost: what a round times (cost.TIMINGS)
 
 
 FULL = Settings()

@@ -20,8 +20,10 @@ What a round times (``cost_timing``, :func:`timed_render`): the CPU time of
 the rendering process (``cpu``, every thread's, the default), its wall-clock
 time (``wall``), or the sum of Dr.Jit's kernel history ``execution_time``
 (``kernels``). Measured on this 2-core machine at load average 20–23 (5
-models against gold α 0.1, twice each, 12 rounds, by :func:`compare` with
-``both``): the standard deviation of the log ratios was 0.09–0.28 by wall
+models against gold α 0.1, twice each, 12 rounds: ``python -m
+mi_brdfs.tools.fit.cost docs/benchmarks/trade --timings --models lambert
+phong ashikhmin_shirley cook_torrance/beckmann/smith
+cook_torrance/ggx/smith+ec``, :func:`steadiness`): the standard deviation of the log ratios was 0.09–0.28 by wall
 clock, 0.10–0.28 by kernel history (on the LLVM backend it is wall-clock
 time around each kernel, so the load is in it), 0.021–0.046 by CPU time;
 the two CPU-time intervals of a model overlapped for 4 of the 5. CPU
@@ -315,13 +317,59 @@ def calls_changed(rows: list[dict]) -> tuple[int, int]:
     return changed, pairs
 
 
+def steadiness(report_dir: str, max_targets: int | None = 1, models: list[str] | None = None,
+               rounds: int = 12, repeats: int = 2, settings=None, show=print) -> list[dict]:
+    """Every timing of :data:`TIMINGS` on the same rounds: per fit of a
+    report (the first ``max_targets`` targets, ``models`` or all), ``repeats``
+    times ``rounds`` rounds; the geometric mean, interval and standard
+    deviation of the log ratios of each timing, the load average."""
+    settings = settings or FULL
+    with open(os.path.join(report_dir, "fits.json")) as f:
+        saved = [r for r in json.load(f) if "error" not in r
+                 and (models is None or r["model"] in models)]
+    specs = list(dict.fromkeys(r["target"] for r in saved))[:max_targets]
+    rows = []
+    for spec in specs:
+        mine = [r for r in saved if r["target"] == spec]
+        with Worker(T.parse([spec])[0], settings.res, settings.spp) as target_worker, \
+                Worker(mine[0]["parameters"], settings.res, settings.spp) as model_worker:
+            for repeat in range(repeats):
+                for r in mine:
+                    model_worker.load(r["parameters"])
+                    both, load = [], os.getloadavg()[0]
+                    compare(target_worker, model_worker, (rounds, rounds), 0.0, both=both)
+                    row = {"target": spec, "model": r["model"], "repeat": repeat,
+                           "load": max(load, os.getloadavg()[0])}
+                    for timing, i in TIMINGS.items():
+                        ratios = [b[i] for b in both]
+                        row[timing] = interval(ratios) + (
+                            statistics.stdev(math.log(x) for x in ratios),)
+                    rows.append(row)
+                    show(" | ".join([f"{spec} {r['model']} #{repeat} load {row['load']:.1f}"] + [
+                        f"{t} {m:.3f} ({lo:.3f}-{hi:.3f}) sd(log) {sd:.3f}"
+                        for t, (m, lo, hi, sd) in ((t, row[t]) for t in TIMINGS)]))
+    return rows
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="python -m mi_brdfs.tools.fit.cost",
                                 description="Measure a fit report's render costs again and "
                                             "compare the intervals (writes nothing).")
     p.add_argument("report", help="a mi-brdfs fit report folder (its fits.json)")
     p.add_argument("--targets", type=int, default=None, help="only the first N targets")
+    p.add_argument("--timings", action="store_true",
+                   help="instead: time each fit by every timing (wall, kernels, cpu) on the "
+                        "same 12 rounds, twice, and print each one's spread")
+    p.add_argument("--models", nargs="+", default=None, metavar="NAME",
+                   help="with --timings: only these models")
     args = p.parse_args(argv)
+    if args.timings:
+        try:
+            steadiness(args.report, args.targets or 1, args.models)
+        except Exception as error:
+            print(f"{p.prog}: error: {one_line(error)}", file=sys.stderr)
+            return 1
+        return 0
     try:
         rows = remeasure(args.report, args.targets)
     except Exception as error:

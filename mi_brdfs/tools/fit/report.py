@@ -169,6 +169,8 @@ def _row(r: dict, front: set, equals: dict) -> str:
             f'<td><a href="{r["xml"]}">xml</a></td></tr>')
 
 
+TIMED = {"cpu": "CPU time (every thread's: the work, not the wait for a core)",
+         "wall": "wall-clock time", "kernels": "kernel time (Dr.Jit's kernel history)"}
 BRDF_ERROR = ("BRDF error: the L² distance of the fit's eval from the target's over the "
               "direction pairs (projected solid angle), over a black BSDF's: 0 identical, 1 as "
               "far as black. It is not bounded by 1: a lobe sharper or taller than the "
@@ -285,7 +287,7 @@ front, the ★ and the verdict use that one rule. The verdict's cheaper model is
 whose FLIP is within the tolerance of the best: the target's seed noise (the target against
 itself at another seed; {rank.LOOKS_SAME} without renders); if none is, it says so.
 {html.escape(BRDF_ERROR, quote=False)}.
-Render cost: the model's time over the target's, each in a process of its own, until the 90 % interval is within {s.cost_tolerance:.0%} or after
+Render cost: the model's {TIMED.get(s.cost_timing, s.cost_timing)} over the target's, each in a process of its own, until the 90 % interval is within {s.cost_tolerance:.0%} or after
 {s.cost_rounds[1]} rounds (at least {s.cost_rounds[0]}); the verdict says when an interval did
 not close, and the load it was timed at; ops: Dr.Jit operations of a traced eval and sample
 over the target's. The documentation's fit guide explains each figure.</p>

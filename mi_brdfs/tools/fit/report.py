@@ -76,6 +76,9 @@ def write(out: str, records: list[dict], settings, command: str, features: dict 
     """Every file of the report into the folder ``out`` (a temporary one);
     the records in the report's order (targets as given, fits in rank order,
     failed fits last), each with its ``rank``."""
+    timed = [r for r in records if r.get("cost_ratio") is not None]
+    if timed and "cost_timing" not in timed[0]:   # records timed before cost_timing existed:
+        settings = settings.replace(cost_timing="wall", cost_rounds=(6, 40))  # by wall clock
     by_target: dict[str, list[dict]] = {}
     for r in records:
         by_target.setdefault(r["target_name"], []).append(r)

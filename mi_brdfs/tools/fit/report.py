@@ -17,7 +17,8 @@
     ``target_albedo`` ([0°, 60°, 85°][R, G, B]), ``image_noise_flip`` and
     ``image_noise_relmse`` (the target against itself at another seed: the
     seed noise, the tolerance of "looks the same", :mod:`.rank`),
-    ``cost_rounds``, ``cost_closed`` (the interval reached the tolerance),
+    ``cost_rounds``, ``cost_timing`` (what a round timed: :data:`.cost.TIMINGS`),
+    ``cost_closed`` (the interval reached the tolerance),
     ``cost_load`` and ``cost_cores`` (the machine's load average when it was
     timed, and its cores), ``ops``, ``reruns`` and ``worker`` (a task re-run
     after its Dask worker was lost), ``target_features``, ``xml``,
@@ -51,7 +52,7 @@ FIELDS = ("target", "model", "plugin", "rank", "parameters", "image_flip", "imag
           "cost_high", "ops_ratio", "seconds")
 EXTRA = ("image_views", "image_noise_flip", "image_noise_relmse", "effective", "albedo",
          "target_albedo", "cost_rounds", "cost_closed", "cost_load", "cost_cores", "ops",
-         "reruns", "worker",
+         "cost_timing", "reruns", "worker",
          "target_features", "xml", "renders", "start_errors", "error", "cost_error")
 CSV_EXTRA = ("effective", "image_noise_flip", "cost_rounds", "cost_load", "reruns", "xml",
              "error")

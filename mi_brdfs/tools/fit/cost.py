@@ -26,7 +26,9 @@ phong ashikhmin_shirley cook_torrance/beckmann/smith
 cook_torrance/ggx/smith+ec``, :func:`steadiness`): the standard deviation of the log ratios was 0.09–0.28 by wall
 clock, 0.10–0.28 by kernel history (on the LLVM backend it is wall-clock
 time around each kernel, so the load is in it), 0.021–0.046 by CPU time;
-the two CPU-time intervals of a model overlapped for 4 of the 5. CPU
+the two CPU-time intervals of a model overlapped for 4 of the 5. At load
+average 4 (lambert, twice) the gap was smaller: 0.05–0.07 by CPU time,
+0.07–0.11 by wall clock and by kernel history. CPU
 time counts the work a render does and not the time it waits for a core.
 
 **Again** (``python -m mi_brdfs.tools.fit.cost REPORT_DIR [--targets N]``):

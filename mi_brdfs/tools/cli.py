@@ -146,7 +146,8 @@ def cmd_fit(args: argparse.Namespace) -> int:
     show = sweep.progress_printer(args.prog, enabled=not args.quiet, verbose=args.verbose > 0)
     try:
         records = fit.fit(args.targets, args.output, args.models, quick=args.quick,
-                          metric_name=args.metric, jobs=args.jobs, scheduler=args.scheduler,
+                          metric_name=args.metric, scheduler=args.scheduler,
+                          jobs=args.jobs or max(1, min(2, os.cpu_count() or 1)),
                           show=show, command=" ".join(["mi-brdfs", *sys.argv[1:]]))
     finally:
         show.close()
@@ -221,7 +222,7 @@ COMPARE_LIMITS = {
 # extra to import: the parser of every command must not)
 BENCH_GROUPS = ("builtin", "models", "oren_nayar", "sampling", "integrators", "convergence",
                 "scaling", "lobes", "energy", "materials", "frozen", "kernels", "tracing",
-                "explore", "trade")
+                "explore", "trade", "fit")
 
 
 def parser() -> Parser:
@@ -321,8 +322,9 @@ def parser() -> Parser:
     f.add_argument("--quick", action="store_true", help="fewer directions, steps and pixels (CI)")
     f.add_argument("--metric", default="cosine", choices=("cosine", "ngan"),
                    help="the BRDF-space metric (default cosine; ngan: Ngan et al. 2005)")
-    f.add_argument("-j", "--jobs", type=integer(1, 1024), default=1,
-                   help="local worker processes (default 1: the steadiest cost ratios)")
+    f.add_argument("-j", "--jobs", type=integer(1, 1024), default=None,
+                   help="local worker processes for the fits (default: the cores, at most 2; "
+                        "the render costs are timed afterwards, one at a time)")
     f.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="run on this Dask distributed scheduler (e.g. tcp://host:8786) "
                         "instead of local processes")

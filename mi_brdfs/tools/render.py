@@ -163,9 +163,9 @@ def render(scene: str, outputs: list[str] | None = None, defines: Sequence[str] 
     set_threads(threads)
     set_verbosity(verbose)
 
-    # parallel=False: serial loading is cheap, and parallel loading can fail while
-    # a plugin's constructor calls the loader (see _binding.create).
-    loaded = mi.load_file(scene_path, parallel=False, **defines)
+    # Mitsuba's parallel loading: the plugins' constructors make their parts
+    # without the loader (_binding.create), so it is safe (tests/tools/test_fit_speed.py)
+    loaded = mi.load_file(scene_path, **defines)
     spp = check_render_numbers(loaded, spp, passes, seed, defines)
 
     log = info_logger(prog, verbose)

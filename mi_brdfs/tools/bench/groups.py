@@ -339,6 +339,51 @@ def trade(s: Settings, refs: References, out_dir: str) -> list[dict]:
              "failed": r.get("error", "")} for r in records]
 
 
+FIT_MATERIAL = 0          # the fit group's material: the first of the trade sweep (gold)
+
+
+def fit_runs(name: str, settings, models: list[str] | None, repeats: int) -> dict:
+    """``repeats`` fits of the fit group's material, each into a fresh folder:
+    the median wall time, and of it the fits' share (the rest: the render
+    costs), the load average before and after."""
+    import tempfile
+
+    from ..fit import fit
+    label, spec = TARGETS[FIT_MATERIAL]
+    runs, fits, loads = [], [], [os.getloadavg()[0]]
+    for _ in range(repeats):
+        marks = {}
+
+        def show(done, total, elapsed, record, marks=marks):
+            if "cost_rounds" not in record and "cost_error" not in record:
+                marks["fits"] = elapsed
+        with tempfile.TemporaryDirectory() as tmp:
+            start = time.perf_counter()
+            records = fit([spec], os.path.join(tmp, "fit"), models, settings=settings,
+                          show=show, warn=lambda m: None)
+            runs.append(time.perf_counter() - start)
+        fits.append(marks.get("fits", 0.0))
+        loads.append(os.getloadavg()[0])
+    return {"fit": name, "material": label, "models": len(records),
+            "median_s": statistics.median(runs), "fits_s": statistics.median(fits),
+            "costs_s": statistics.median(r - f for r, f in zip(runs, fits)),
+            "runs": repeats, "load_before": loads[0], "load_after": loads[-1],
+            "failed": sum("error" in r for r in records)}
+
+
+def fit_time(s: Settings, refs: References) -> list[dict]:
+    """mi-brdfs fit's own time on one material (gold α 0.1, the trade sweep's
+    first): a default fit and a --quick fit against every course model, the
+    median wall time of three runs, split into the fits (one worker process)
+    and the render costs timed after them, with the load average before and
+    after (the machine's other work slows both). --quick (CI): one --quick
+    fit of one model with two timing rounds."""
+    from ..fit import FULL as FIT_FULL, QUICK as FIT_QUICK
+    if s is not FULL:
+        return [fit_runs("quick", FIT_QUICK.replace(cost_rounds=(2, 2)), ["lambert"], 1)]
+    return [fit_runs("default", FIT_FULL, None, 3), fit_runs("quick", FIT_QUICK, None, 3)]
+
+
 # ----------------------------------------------------------------------------
 #  Every group, in the order they run
 # ----------------------------------------------------------------------------
@@ -373,4 +418,5 @@ GROUPS: dict[str, Group] = {g.name: g for g in [
     Group("tracing", tracing, report.tracing, plots.tracing),
     Group("explore", explore, explore_finding),
     Group("trade", trade, report.trade, writes=True),
+    Group("fit", fit_time, report.fit_time),
 ]}

@@ -166,6 +166,17 @@ def tracing(rows: list[dict]) -> str:
             f"{r['sample']['microfacet_objects']} MicrofacetDistribution objects.")
 
 
+def fit_time(rows: list[dict]) -> str | None:
+    """How long a fit of one material takes, by settings, and the load it ran at."""
+    done = [r for r in rows if r.get("median_s") is not None]
+    if not done:
+        return None
+    return "A fit of one material against every course model: " + "; ".join(
+        f"{r['fit']} settings {r['median_s']:.0f} s (median of {r['runs']}; the fits "
+        f"{r['fits_s']:.0f} s, the costs {r['costs_s']:.0f} s; {r['models']} models) at load "
+        f"average {r['load_before']:.1f}–{r['load_after']:.1f}" for r in done) + "."
+
+
 def trade(rows: list[dict]) -> str | None:
     """The first-ranked model per material (by the image's FLIP, the cheaper
     of those within its tie band) and the best model that costs less beyond
@@ -215,6 +226,7 @@ TITLES = {
     "tracing": "Tracing one call of each method",
     "explore": "The explorer's latency",
     "trade": "Which model for which material",
+    "fit": "How long a fit takes",
 }
 
 
@@ -249,6 +261,11 @@ HEADERS = {
     "max_ms": "largest time (ms)",
     "render_calls_all": "render calls, all",
     "config": "configuration",
+    "fit": "settings",
+    "fits_s": "of it the fits (s)",
+    "costs_s": "of it the render costs (s)",
+    "load_before": "load average before",
+    "load_after": "load average after",
 }
 WORDS = {"builtin": "built-in", "first": "first render", "warm": "warm render",
          "peak": "peak memory", "relmse": "relMSE", "vs": "over",

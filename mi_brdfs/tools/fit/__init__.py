@@ -31,7 +31,7 @@ import sys
 import time
 
 from .. import compare, destinations
-from . import cost, effective, metric, models, report, sweep, targets
+from . import cost, effective, metric, models, report, sweep, targets, work
 from .task import FULL, QUICK, Settings
 
 __all__ = ["fit", "FULL", "QUICK", "Settings", "metric", "models", "targets"]
@@ -78,17 +78,18 @@ def fit(specs: list[str], out_dir: str, model_names: list[str] | None = None,
                                                                      rungs=not model_names)
                                 if e.name not in names]]
     measuring = settings.render and settings.cost
-    total = len(tasks) * (2 if measuring else 1)
+    total = len(tasks)                 # models fitted, then models timed (show: per phase)
     start = time.perf_counter()
+    works = {t.name: prepared(t, settings) for t in parsed}
     try:
         records = sweep.run_fits(tasks, settings, jobs=jobs, scheduler=scheduler, show=show,
-                                 client=client, worker_timeout=timeout, total=total, start=start)
+                                 client=client, worker_timeout=timeout, total=total, start=start,
+                                 works=works)
     finally:
         if client is not None:
             client.close()
     if measuring:
-        cost.measure_all(parsed, records, settings, show, offset=len(tasks), total=total,
-                         start=start)
+        cost.measure_all(parsed, records, settings, show, total=total, start=start)
     with destinations.report_dir(out_dir, "fit", files) as tmp:
         records = report.write(tmp, records, settings, command, found)
         if also:
@@ -96,6 +97,15 @@ def fit(specs: list[str], out_dir: str, model_names: list[str] | None = None,
     for r in records:
         r.pop("images", None)
     return records
+
+
+def prepared(target, settings: Settings):
+    """The target's :class:`.work.TargetWork`, once for all its fits; None if
+    it fails (each task then tries again and records the error)."""
+    try:
+        return work.prepare(target, settings)
+    except Exception:                  # the tasks report it, one record each
+        return None
 
 
 def report_path(out_dir: str) -> str:

@@ -2,18 +2,34 @@
 the answer is a property of the model and the scene, not of one noisy run.
 
 **Timed** (:func:`measure_costs`). The target's scene (the ``environment``
-view of :mod:`.scene`) lives in a process of its own, and each model's in
-another (spawned, never forked; one BSDF instance alive in each: Dr.Jit
-traces every live instance at every render). After an untimed render in each
-(it compiles or loads the kernels), the two render in turn — each round one
-timed render of each, the order alternating — and each round gives the
-ratio model time / target time, so that a change of the machine's load
-between rounds cancels. The rounds go on until the 90 % interval of the
-geometric mean of the ratios (Student's t on their logarithms) is within
-``cost_tolerance`` (high/low <= 1.05 by default), at least and at most
-``cost_rounds``. ``cost_ratio`` is that mean, ``cost_low`` and ``cost_high``
-the interval. Only one measurement runs at a time, after every fit: fits
-running beside it would be measured with it.
+view of :mod:`.scene`) lives in a process of its own, and the models' in
+another (spawned, never forked), which loads one model's scene after the
+other, the previous one released first (one BSDF instance alive at a time:
+Dr.Jit traces every live instance at every render; a process per model cost
+~10 s to start under load, loading in place ~1 s). After an untimed render
+of each scene (it compiles or loads the kernels), the two render in turn —
+each round one timed render of each, the order alternating — and each round
+gives the ratio model time / target time. The rounds go on until the 90 %
+interval of the geometric mean of the ratios (Student's t on their
+logarithms) is within ``cost_tolerance`` (high/low <= 1.05 by default), at
+least and at most ``cost_rounds``. ``cost_ratio`` is that mean,
+``cost_low`` and ``cost_high`` the interval, ``cost_timing`` what was timed.
+Only one measurement runs at a time, after every fit.
+
+What a round times (``cost_timing``, :func:`timed_render`): the CPU time of
+the rendering process (``cpu``, every thread's, the default), its wall-clock
+time (``wall``), or the sum of Dr.Jit's kernel history ``execution_time``
+(``kernels``). Measured on this 2-core machine at load average 20–23 (5
+models against gold α 0.1, twice each, 12 rounds: ``python -m
+mi_brdfs.tools.fit.cost docs/benchmarks/trade --timings --models lambert
+phong ashikhmin_shirley cook_torrance/beckmann/smith
+cook_torrance/ggx/smith+ec``, :func:`steadiness`): the standard deviation of the log ratios was 0.09–0.28 by wall
+clock, 0.10–0.28 by kernel history (on the LLVM backend it is wall-clock
+time around each kernel, so the load is in it), 0.021–0.046 by CPU time;
+the two CPU-time intervals of a model overlapped for 4 of the 5. At load
+average 4 (lambert, twice) the gap was smaller: 0.05–0.07 by CPU time,
+0.07–0.11 by wall clock and by kernel history. CPU
+time counts the work a render does and not the time it waits for a core.
 
 **Again** (``python -m mi_brdfs.tools.fit.cost REPORT_DIR [--targets N]``):
 the costs of a fit report's fits measured once more and printed beside the
@@ -37,6 +53,7 @@ import statistics
 import sys
 import time
 
+import drjit as dr
 import mitsuba as mi
 
 from ..analysis import bsdf_call, bsdf_inputs, variables_created
@@ -68,18 +85,42 @@ def operations(bsdf) -> int:
                for method in ("eval", "sample"))
 
 
+def _load(spec, res: int, spp: int):
+    """The scene of ``spec``, rendered once untimed, and its operation count."""
+    scene = mi.load_dict(S.scene_dict(_make(spec), res, S.COST_VIEW))
+    S.render(scene, spp, seed=0)
+    return scene, operations(scene.shapes()[0].bsdf())
+
+
+def timed_render(scene, spp: int, seed: int) -> tuple[float, float, float]:
+    """One render's (wall-clock seconds, seconds its kernels executed: the sum
+    of Dr.Jit's kernel history ``execution_time``, CPU seconds of this
+    process: every thread's)."""
+    dr.kernel_history_clear()
+    with dr.scoped_set_flag(dr.JitFlag.KernelHistory, True):
+        start, cpu = time.perf_counter(), time.process_time()
+        S.render(scene, spp, seed=seed)
+        wall, cpu = time.perf_counter() - start, time.process_time() - cpu
+        history = dr.kernel_history()
+    return wall, sum(k.get("execution_time", 0.0) for k in history) / 1e3, cpu
+
+
 def _serve(conn, spec, res: int, spp: int) -> None:
     """The worker: load the scene, render once untimed, count operations, then
-    time one render per request (its seed) until told to stop (None)."""
+    answer requests until told to stop (None): a seed, one timed render
+    (:func:`timed_render`); ("load", spec), another BSDF's scene in place of
+    the first (released first: one BSDF instance alive at a time)."""
     try:
-        scene = mi.load_dict(S.scene_dict(_make(spec), res, S.COST_VIEW), parallel=False)
-        S.render(scene, spp, seed=0)
-        ops = operations(scene.shapes()[0].bsdf())
+        scene, ops = _load(spec, res, spp)
         conn.send(("ready", ops))
-        while (seed := conn.recv()) is not None:
-            start = time.perf_counter()
-            S.render(scene, spp, seed=seed)
-            conn.send(("time", time.perf_counter() - start))
+        while (request := conn.recv()) is not None:
+            if isinstance(request, tuple):
+                del scene
+                S.release()
+                scene, ops = _load(request[1], res, spp)
+                conn.send(("ready", ops))
+            else:
+                conn.send(("time", timed_render(scene, spp, request)))
     except Exception as error:                 # reported to the parent on one line
         conn.send(("error", one_line(error)))
     finally:
@@ -110,9 +151,15 @@ class Worker:
             raise CostError(f"answered {what!r} where {kind!r} was due")
         return value
 
-    def time(self, seed: int) -> float:
+    def time(self, seed: int) -> tuple[float, float, float]:
+        """(wall-clock, kernel, CPU) seconds of one render (:func:`timed_render`)."""
         self.conn.send(seed)
         return self._reply("time")
+
+    def load(self, spec) -> None:
+        """Another BSDF's scene in this process, in place of the one held."""
+        self.conn.send(("load", spec))
+        self.ops = self._reply("ready")
 
     def close(self) -> None:
         try:
@@ -143,20 +190,29 @@ def interval(ratios: list[float], confidence: float = 0.90) -> tuple[float, floa
     return math.exp(mean), math.exp(mean - half), math.exp(mean + half)
 
 
+TIMINGS = {"wall": 0, "kernels": 1, "cpu": 2}     # which of a worker's times the ratio takes
+
+
 def compare(target_worker: Worker, model_worker: Worker, rounds: tuple[int, int],
-            tolerance: float) -> dict:
+            tolerance: float, timing: str = "cpu", both: list | None = None) -> dict:
     """Rounds of one timed render each, alternating which goes first, until
-    the interval is tight (module docstring)."""
+    the interval of the ``timing`` ratios is tight (module docstring);
+    ``both``: a list that receives each round's ratios of every timing."""
+    if timing not in TIMINGS:
+        raise ValueError(f"cost timing {timing!r} is unknown; valid: {', '.join(TIMINGS)}")
     ratios = []
     for r in range(rounds[1]):
         order = (target_worker, model_worker) if r % 2 == 0 else (model_worker, target_worker)
         seconds = {id(w): w.time(seed=1 + r) for w in order}
-        ratios.append(seconds[id(model_worker)] / seconds[id(target_worker)])
+        pair = tuple(m / t for m, t in zip(seconds[id(model_worker)], seconds[id(target_worker)]))
+        if both is not None:
+            both.append(pair)
+        ratios.append(pair[TIMINGS[timing]])
         mean, low, high = interval(ratios)
         if len(ratios) >= rounds[0] and high / low <= 1.0 + tolerance:
             break
     return {"cost_ratio": mean, "cost_low": low, "cost_high": high, "cost_rounds": len(ratios),
-            "cost_closed": high / low <= 1.0 + tolerance}
+            "cost_closed": high / low <= 1.0 + tolerance, "cost_timing": timing}
 
 
 def measure_costs(target, records: list[dict], settings, show=None) -> None:
@@ -171,21 +227,33 @@ def measure_costs(target, records: list[dict], settings, show=None) -> None:
         for r in ok:
             r["cost_error"] = f"the target's cost worker failed: {error}"
         return
+    timing = settings.cost_timing
+    model_worker = None                  # one process for every model, each loaded in turn
     with target_worker:
-        for r in ok:
-            load = os.getloadavg()[0]
-            try:
-                with Worker(r["parameters"], settings.res, settings.spp) as model_worker:
+        try:
+            for r in ok:
+                load = os.getloadavg()[0]
+                try:
+                    if model_worker is None:
+                        model_worker = Worker(r["parameters"], settings.res, settings.spp)
+                    else:
+                        model_worker.load(r["parameters"])
                     r.update(compare(target_worker, model_worker, settings.cost_rounds,
-                                     settings.cost_tolerance))
+                                     settings.cost_tolerance, timing))
                     r["ops_ratio"] = model_worker.ops / target_worker.ops
                     r["ops"] = model_worker.ops
-            except CostError as error:
-                r["cost_error"] = str(error)
-            r["cost_load"] = load
-            r["cost_cores"] = os.cpu_count()
-            if show:
-                show(r)
+                except CostError as error:
+                    r["cost_error"] = str(error)
+                    if model_worker is not None:       # a fresh process for the next one
+                        model_worker.close()
+                        model_worker = None
+                r["cost_load"] = max(load, os.getloadavg()[0])
+                r["cost_cores"] = os.cpu_count()
+                if show:
+                    show(r)
+        finally:
+            if model_worker is not None:
+                model_worker.close()
 
 
 def measure_all(targets: list, records: list[dict], settings, show=None, offset: int = 0,
@@ -251,13 +319,59 @@ def calls_changed(rows: list[dict]) -> tuple[int, int]:
     return changed, pairs
 
 
+def steadiness(report_dir: str, max_targets: int | None = 1, models: list[str] | None = None,
+               rounds: int = 12, repeats: int = 2, settings=None, show=print) -> list[dict]:
+    """Every timing of :data:`TIMINGS` on the same rounds: per fit of a
+    report (the first ``max_targets`` targets, ``models`` or all), ``repeats``
+    times ``rounds`` rounds; the geometric mean, interval and standard
+    deviation of the log ratios of each timing, the load average."""
+    settings = settings or FULL
+    with open(os.path.join(report_dir, "fits.json")) as f:
+        saved = [r for r in json.load(f) if "error" not in r
+                 and (models is None or r["model"] in models)]
+    specs = list(dict.fromkeys(r["target"] for r in saved))[:max_targets]
+    rows = []
+    for spec in specs:
+        mine = [r for r in saved if r["target"] == spec]
+        with Worker(T.parse([spec])[0], settings.res, settings.spp) as target_worker, \
+                Worker(mine[0]["parameters"], settings.res, settings.spp) as model_worker:
+            for repeat in range(repeats):
+                for r in mine:
+                    model_worker.load(r["parameters"])
+                    both, load = [], os.getloadavg()[0]
+                    compare(target_worker, model_worker, (rounds, rounds), 0.0, both=both)
+                    row = {"target": spec, "model": r["model"], "repeat": repeat,
+                           "load": max(load, os.getloadavg()[0])}
+                    for timing, i in TIMINGS.items():
+                        ratios = [b[i] for b in both]
+                        row[timing] = interval(ratios) + (
+                            statistics.stdev(math.log(x) for x in ratios),)
+                    rows.append(row)
+                    show(" | ".join([f"{spec} {r['model']} #{repeat} load {row['load']:.1f}"] + [
+                        f"{t} {m:.3f} ({lo:.3f}-{hi:.3f}) sd(log) {sd:.3f}"
+                        for t, (m, lo, hi, sd) in ((t, row[t]) for t in TIMINGS)]))
+    return rows
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="python -m mi_brdfs.tools.fit.cost",
                                 description="Measure a fit report's render costs again and "
                                             "compare the intervals (writes nothing).")
     p.add_argument("report", help="a mi-brdfs fit report folder (its fits.json)")
     p.add_argument("--targets", type=int, default=None, help="only the first N targets")
+    p.add_argument("--timings", action="store_true",
+                   help="instead: time each fit by every timing (wall, kernels, cpu) on the "
+                        "same 12 rounds, twice, and print each one's spread")
+    p.add_argument("--models", nargs="+", default=None, metavar="NAME",
+                   help="with --timings: only these models")
     args = p.parse_args(argv)
+    if args.timings:
+        try:
+            steadiness(args.report, args.targets or 1, args.models)
+        except Exception as error:
+            print(f"{p.prog}: error: {one_line(error)}", file=sys.stderr)
+            return 1
+        return 0
     try:
         rows = remeasure(args.report, args.targets)
     except Exception as error:

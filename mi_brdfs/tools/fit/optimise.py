@@ -66,7 +66,15 @@ class Problem:
 def problem(target_bsdf, pairs, objective: str = "cbrt") -> Problem:
     """The target's values at ``pairs`` (non-finite values: the pair left out)."""
     si, wo = surface_at(pairs.wi), from_numpy(mi.Vector3f, pairs.wo.T)
-    values = values_of(target_bsdf, si, wo)
+    return problem_from_values(values_of(target_bsdf, si, wo), pairs, objective, si, wo)
+
+
+def problem_from_values(values: np.ndarray, pairs, objective: str = "cbrt", si=None,
+                        wo=None) -> Problem:
+    """:func:`problem` from the target's values at ``pairs`` (N, 3), taken
+    once per target and handed to every fit (:mod:`.work`)."""
+    if si is None:
+        si, wo = surface_at(pairs.wi), from_numpy(mi.Vector3f, pairs.wo.T)
     finite = np.isfinite(values).all(axis=1)
     values = np.where(finite[:, None], values, 0.0)
     weight = np.where(finite, pairs.weight, 0.0)

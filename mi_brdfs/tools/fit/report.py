@@ -23,7 +23,8 @@
     time to the target's noise over the target's, [ratio, low, high]:
     :func:`.rank.time_to_noise`, the cost the verdict compares; absent in
     records made before the variance was measured),
-    ``cost_rounds``, ``cost_closed`` (the interval reached the tolerance),
+    ``cost_rounds``, ``cost_timing`` (what a round timed: :data:`.cost.TIMINGS`),
+    ``cost_closed`` (the interval reached the tolerance),
     ``cost_load`` and ``cost_cores`` (the machine's load average when it was
     timed, and its cores), ``ops``, ``reruns`` and ``worker`` (a task re-run
     after its Dask worker was lost), ``target_features``, ``xml``,
@@ -59,7 +60,7 @@ FIELDS = ("target", "model", "plugin", "rank", "parameters", "image_flip", "imag
 EXTRA = ("image_views", "image_noise_flip", "image_noise_relmse", "noise_ratio", "noise_low",
          "noise_high", "noise_seeds", "noise_spp", "time_to_noise", "effective", "albedo",
          "target_albedo", "cost_rounds", "cost_closed", "cost_load", "cost_cores", "ops",
-         "reruns", "worker",
+         "cost_timing", "reruns", "worker",
          "target_features", "xml", "renders", "start_errors", "error", "cost_error")
 CSV_EXTRA = ("effective", "image_noise_flip", "noise_ratio", "noise_low", "noise_high",
              "time_to_noise", "cost_rounds", "cost_load", "reruns", "xml", "error")
@@ -84,6 +85,9 @@ def write(out: str, records: list[dict], settings, command: str, features: dict 
     """Every file of the report into the folder ``out`` (a temporary one);
     the records in the report's order (targets as given, fits in rank order,
     failed fits last), each with its ``rank``."""
+    timed = [r for r in records if r.get("cost_ratio") is not None]
+    if timed and "cost_timing" not in timed[0]:   # records timed before cost_timing existed:
+        settings = settings.replace(cost_timing="wall", cost_rounds=(6, 40))  # by wall clock
     by_target: dict[str, list[dict]] = {}
     for r in records:
         by_target.setdefault(r["target_name"], []).append(r)
@@ -195,6 +199,8 @@ def _row(r: dict, front: set, equals: dict) -> str:
             f'<td><a href="{r["xml"]}">xml</a></td></tr>')
 
 
+TIMED = {"cpu": "CPU time (every thread's: the work, not the wait for a core)",
+         "wall": "wall-clock time", "kernels": "kernel time (Dr.Jit's kernel history)"}
 BRDF_ERROR = ("BRDF error: the L² distance of the fit's eval from the target's over the "
               "direction pairs (projected solid angle), over a black BSDF's: 0 identical, 1 as "
               "far as black. It is not bounded by 1: a lobe sharper or taller than the "
@@ -343,8 +349,8 @@ front, the ★ and the verdict use that one rule. The verdict's cheaper model is
 whose FLIP is within the tolerance of the best: the target's seed noise (the target against
 itself at another seed; {rank.LOOKS_SAME} without renders); if none is, it says so.
 {html.escape(BRDF_ERROR, quote=False)}.
-Cost, in three columns: the <b>time per sample</b>, the model's render time over the target's,
-each in a process of its own, until the 90 % interval is within {s.cost_tolerance:.0%} or after
+Cost, in three columns: the <b>time per sample</b>, the model's {TIMED.get(s.cost_timing, s.cost_timing)} over the target's,
+until the 90 % interval is within {s.cost_tolerance:.0%} or after
 {s.cost_rounds[1]} rounds (at least {s.cost_rounds[0]}); the <b>variance at equal samples</b>,
 the model's pixel variance over the target's, each relative to its own image (relMSE's noise
 term over the sphere's pixels of the views, from {s.noise_seeds} renders each at {s.noise_spp}

@@ -131,9 +131,11 @@ def lost_workers(client, key) -> int:
 
 
 def dask_sweep(client, address: str, tasks: list, settings: Settings, collect,
-               worker_timeout: float = WORKER_TIMEOUT) -> None:
+               worker_timeout: float = WORKER_TIMEOUT, works: dict | None = None) -> None:
     """Every task on the cluster; ``collect(i, record)`` as each finishes."""
-    futures = [client.submit(fit_and_measure, t, m, settings, pure=False) for t, m in tasks]
+    works = works or {}
+    futures = [client.submit(fit_and_measure, t, m, settings, works.get(t.name), pure=False)
+               for t, m in tasks]
     pending = dict(enumerate(futures))
     alone_since = None
     try:
@@ -175,8 +177,11 @@ def failed(task, message: str) -> dict:
     return {"target": t.spec, "model": m.name, "plugin": m.plugin, "error": message}
 
 
-def local_sweep(executor: cf.Executor, tasks: list, settings: Settings, collect) -> None:
-    futures = {executor.submit(fit_and_measure, t, m, settings): i for i, (t, m) in enumerate(tasks)}
+def local_sweep(executor: cf.Executor, tasks: list, settings: Settings, collect,
+                works: dict | None = None) -> None:
+    works = works or {}
+    futures = {executor.submit(fit_and_measure, t, m, settings, works.get(t.name)): i
+               for i, (t, m) in enumerate(tasks)}
     try:
         for future in cf.as_completed(futures):
             i = futures[future]
@@ -194,12 +199,13 @@ def local_sweep(executor: cf.Executor, tasks: list, settings: Settings, collect)
 def run_fits(tasks: list[tuple[T.Target, M.Model]], settings: Settings, jobs: int = 1,
              scheduler: str | None = None, show=None, client=None,
              worker_timeout: float = WORKER_TIMEOUT, total: int | None = None,
-             start: float | None = None) -> list[dict]:
+             start: float | None = None, works: dict | None = None) -> list[dict]:
     """Every (target, model) task, on local processes or on the Dask scheduler
     at ``scheduler`` (``client``: one already connected); records in task
     order. ``show(done, total, elapsed, record)`` after each task (``total``:
     the steps of the whole run, if more than the fits; ``start``: its
-    ``time.perf_counter()`` at the start of the run)."""
+    ``time.perf_counter()`` at the start of the run; ``works``: target name:
+    its :class:`.work.TargetWork`, handed to each of its tasks)."""
     records: list[dict | None] = [None] * len(tasks)
     start = time.perf_counter() if start is None else start
 
@@ -214,28 +220,53 @@ def run_fits(tasks: list[tuple[T.Target, M.Model]], settings: Settings, jobs: in
         own = client is None
         client = client or connect(scheduler, worker_timeout)
         try:
-            dask_sweep(client, scheduler, tasks, settings, collect, worker_timeout)
+            dask_sweep(client, scheduler, tasks, settings, collect, worker_timeout, works)
         finally:
             if own:
                 client.close()
     else:
         with local_executor(jobs) as executor:
-            local_sweep(executor, tasks, settings, collect)
+            local_sweep(executor, tasks, settings, collect, works)
     return [r for r in records if r is not None]
 
 
+PHASES = {"fit": "fitted", "cost": "cost timed"}
+
+
+def phase(record: dict) -> str:
+    """Which step of a fit a finished record closes: ``fit`` or ``cost``."""
+    return "cost" if "cost_rounds" in record or "cost_error" in record else "fit"
+
+
 def progress_printer(label: str, stream=None, enabled: bool = True, verbose: bool = False):
-    """``show`` for :func:`run_fits` and the cost measurements (a step: one fit,
-    or one model's cost): a bar on a terminal, plain lines in a log."""
-    bar = Progress(label, stream=stream, enabled=enabled, unit="steps")
+    """``show(done, total, elapsed, record)`` for :func:`run_fits` and the
+    cost measurements (``done`` of ``total`` models in the record's phase,
+    :func:`phase`): a bar per phase on a terminal ("LABEL (fitted): 3/24
+    models", the time left from the models after the first, which also
+    starts the worker), plain lines in a log; each finished model's
+    :func:`summary` with ``verbose`` or in a log."""
     out = stream if stream is not None else sys.stderr
+    state = {"phase": None, "bar": None, "start": 0.0}
 
     def show(done: int, total: int, elapsed: float, record: dict) -> None:
+        now = phase(record)
+        if now != state["phase"]:
+            if state["bar"] is not None:
+                state["bar"].close()
+            state.update(phase=now, start=state.get("last", 0.0),       # the phase's start
+                         bar=Progress(f"{label} ({PHASES[now]})", stream=stream,
+                                      enabled=enabled, unit="models"))
+        state["last"] = elapsed
+        bar = state["bar"]
         if enabled and (verbose or not bar.terminal):
             out.write(f"{label}: {summary(record)}\n")
             out.flush()
-        bar(done, total, elapsed)
-    show.close = bar.close
+        bar(done, total, max(elapsed - state["start"], 0.0))
+
+    def close() -> None:
+        if state["bar"] is not None:
+            state["bar"].close()
+    show.close = close
     return show
 
 

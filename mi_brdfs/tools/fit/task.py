@@ -24,7 +24,8 @@ from .. import compare
 from ..analysis import eval_at_viewer
 from ..errors import one_line
 from ..settings import Settings as SettingsBase
-from . import effective, metric, models as M, optimise, scene
+from . import effective, models as M, optimise, scene
+from .work import prepare
 
 SLICE_ANGLES = (0.0, 30.0, 60.0, 80.0)     # viewer angles of the lobe slices (degrees)
 SLICE_POINTS = 181
@@ -45,8 +46,9 @@ class Settings(SettingsBase):
     spp: int = 64
     render: bool = True                      # renders and image errors (else: the fit only)
     cost: bool = True                        # render cost (mi_brdfs.tools.fit.cost)
-    cost_rounds: tuple[int, int] = (6, 40)   # cost: at least, at most this many rounds
+    cost_rounds: tuple[int, int] = (4, 20)   # cost: at least, at most this many rounds
     cost_tolerance: float = 0.05             # cost: until the 90 % interval's high/low <= 1.05
+    cost_timing: str = "cpu"                 # cost: what a round times (cost.TIMINGS)
     noise_seeds: int = 8                     # noise: renders at this many seeds per view
     noise_spp: int = 4                       # noise: at this many samples per pixel each
 
@@ -68,11 +70,12 @@ def slices(bsdf) -> list[list[list[float]]]:
 #  One task
 # ----------------------------------------------------------------------------
 
-def fit_and_measure(target, model, settings: Settings, pairs=None) -> dict:
-    """Fit ``model`` to ``target`` (a :class:`.targets.Target`) and measure it.
+def fit_and_measure(target, model, settings: Settings, work=None) -> dict:
+    """Fit ``model`` to ``target`` (a :class:`.targets.Target`) and measure it;
+    ``work``: the target's :class:`.work.TargetWork` (computed here if None).
     Never raises: a failure is returned as a record with an ``error`` message."""
     try:
-        return _fit_and_measure(target, model, settings, pairs)
+        return _fit_and_measure(target, model, settings, work)
     except Exception as error:                     # reported in the record, not lost
         return {"target": target.spec, "model": model.name, "plugin": model.plugin,
                 "error": one_line(error), "traceback": traceback.format_exc(),
@@ -84,20 +87,16 @@ def worker_name() -> str:
     return f"{socket.gethostname()}:{os.getpid()}"
 
 
-def _fit_and_measure(target, model, settings: Settings, pairs) -> dict:
+def _fit_and_measure(target, model, settings: Settings, work) -> dict:
     if mi.variant() != "llvm_ad_rgb":
         mi.set_variant("llvm_ad_rgb")
         mi_brdfs.register()
     start = time.perf_counter()
-    if pairs is None:
-        pairs = metric.pairs(settings.metric, settings.viewers, settings.uniform, settings.lobe)
-    target_bsdf = target.load()
-    prob = optimise.problem(target_bsdf, pairs, settings.objective)
+    if work is None:
+        work = prepare(target, settings)
+    prob = optimise.problem_from_values(work.values, work.pairs, settings.objective)
     if not prob.norm > 0:
         raise ValueError(f"target {target.spec} reflects no light at the metric's pairs")
-    target_slices = slices(target_bsdf)
-    target_albedo = effective.albedo(target_bsdf)
-    del target_bsdf
     fit = optimise.fit_model(model, prob, settings)
     fitted = mi.load_dict(M.load_dict(fit["parameters"]))
     model_slices = slices(fitted)
@@ -112,18 +111,22 @@ def _fit_and_measure(target, model, settings: Settings, pairs) -> dict:
               "cost_high": None, "ops_ratio": None, "noise_ratio": None,
               "noise_low": None, "noise_high": None,
               "effective": effective.parameters(model.plugin, fit["parameters"]),
-              "albedo": model_albedo, "target_albedo": target_albedo,
+              "albedo": model_albedo, "target_albedo": work.albedo,
               "starts": fit["starts"], "worker": worker_name(),
-              "slices": {"angles": list(SLICE_ANGLES), "target": target_slices,
+              "slices": {"angles": list(SLICE_ANGLES), "target": work.slices,
                          "model": model_slices}}
     if settings.render:
         scene.release()
-        record.update(images(target, fit["parameters"], settings))
+        record.update(images(target, fit["parameters"], settings, work))
     record["seconds"] = time.perf_counter() - start
     return record
 
 
 NOISE_SEEDS = {"target": 1000, "model": 2000}   # the first seed of each one's noise renders
+
+
+def noise_seeds(who: str, settings: Settings) -> range:
+    return range(NOISE_SEEDS[who], NOISE_SEEDS[who] + settings.noise_seeds)
 
 
 def variance(target, properties: dict, settings: Settings, reference: dict,
@@ -132,33 +135,37 @@ def variance(target, properties: dict, settings: Settings, reference: dict,
     with its 90 % interval (:func:`.scene.variance_ratio`), from
     ``noise_seeds`` renders of each per view at ``noise_spp``, each weighed by
     its own render at ``spp`` (``reference`` the target's, ``image`` the
-    model's, per view); the model's
-    seeds are not the target's, so a model that is the target reads about 1,
-    not exactly 1."""
-    seeds = lambda who: range(NOISE_SEEDS[who], NOISE_SEEDS[who] + settings.noise_seeds)
-    own = scene.target_seed_views(target, settings.res, settings.noise_spp, seeds("target"))
+    model's, per view; the target's noise renders are kept per process:
+    :func:`.scene.target_seed_views`); the model's seeds are not the
+    target's, so a model that is the target reads about 1, not exactly 1."""
+    own = scene.target_seed_views(target, settings.res, settings.noise_spp,
+                                  noise_seeds("target", settings))
     model = scene.seed_views(lambda: M.load_dict(properties), settings.res, settings.noise_spp,
-                             seeds("model"))
+                             noise_seeds("model", settings))
     ratio, low, high = scene.variance_ratio(model, own, image, reference,
                                             scene.sphere_mask(settings.res))
     return {"noise_ratio": ratio, "noise_low": low, "noise_high": high,
             "noise_seeds": settings.noise_seeds, "noise_spp": settings.noise_spp}
 
 
-def images(target, properties: dict, settings: Settings) -> dict:
+def images(target, properties: dict, settings: Settings, work=None) -> dict:
     """The fitted model's renders against the target's in every view: FLIP
     and relMSE over the sphere's pixels per view, and their means; its pixel
-    variance over the target's (:func:`variance`)."""
+    variance over the target's (:func:`variance`). The target's renders and its
+    noise floor come from ``work``, or are rendered here."""
     mask = scene.sphere_mask(settings.res)
-    reference = scene.target_views(target, settings.res, settings.spp, seed=0)
-    again = scene.target_views(target, settings.res, settings.spp, seed=1)
+    if work is None or work.reference is None:
+        from .work import noise_floor
+        reference = scene.target_views(target, settings.res, settings.spp, seed=0)
+        again = scene.target_views(target, settings.res, settings.spp, seed=1)
+        noise = noise_floor(reference, again, settings.res)
+    else:
+        reference, noise = work.reference, work.noise
     model = scene.render_views(lambda: M.load_dict(properties), settings.res, settings.spp, 0)
-    views, noise = {}, {}
+    views = {}
     for view in scene.VIEWS:
         m = compare.metrics(reference[view], model[view], flip_mode="hdr", mask=mask)
-        n = compare.metrics(reference[view], again[view], flip_mode="hdr", mask=mask)
         views[view] = {"flip": m["flip"], "relmse": m["relmse"]}
-        noise[view] = {"flip": n["flip"], "relmse": n["relmse"]}
     mean = lambda d, k: float(np.mean([v[k] for v in d.values()]))
     return {**variance(target, properties, settings, reference, model),
             "image_flip": mean(views, "flip"), "image_relmse": mean(views, "relmse"),

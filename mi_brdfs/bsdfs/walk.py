@@ -238,12 +238,20 @@ def stream(*values):
     bits (Floats), chained two words at a time."""
     words = [_bits(v) for v in values]
     v0, v1 = mi.sample_tea_32(words[0], words[1])
+    jit = dr.is_jit_v(mi.Float)
     for i, word in enumerate(words[2:]):
-        v0, v1 = mi.sample_tea_32(v0 ^ word, v1 + (i + 1))
-    if dr.is_jit_v(mi.Float):
-        state = (mi.UInt64(v0) << 32) | mi.UInt64(v1)
-        return mi.PCG32(dr.width(state), state, mi.UInt64(v1 ^ 0x9e3779b9))
-    return mi.PCG32(1, (v0 << 32) | v1, v1 ^ 0x9e3779b9)
+        # (scalar variants: Python ints, wrapped to 32 bits as UInt32 wraps)
+        v0, v1 = mi.sample_tea_32(v0 ^ word, (v1 + (i + 1)) if jit else (v1 + i + 1) & 0xFFFFFFFF)
+    # The state and increment set directly: PCG32(size, state, seq) would offset
+    # each lane's by its index, and a lane's numbers must depend on its inputs only.
+    rng = mi.PCG32()
+    if jit:
+        rng.state = (mi.UInt64(v0) << 32) | mi.UInt64(v1)
+        rng.inc = (mi.UInt64(v1 ^ 0x9E3779B9) << 1) | 1
+    else:
+        rng.state, rng.inc = (v0 << 32) | v1, ((v1 ^ 0x9E3779B9) << 1) | 1
+    rng.next_uint32()                       # one step: the state well mixed
+    return rng
 
 
 # ----------------------------------------------------------------------------
@@ -280,7 +288,7 @@ def scattered(s: Surface, wi, wo, fresnel: Callable, rng):
     def body(w, tau, weight, total, rng, k, inside):
         u = rng.next_float32(), rng.next_float32(), rng.next_float32()
         tau = _free_flight(s, w, tau, u[0])
-        inside &= ~((w.z > 0.0) & (tau <= 0.0))
+        inside = inside & ((w.z <= 0.0) | (tau > 0.0))      # (no ~: scalar masks are bools)
         wb = -w
         h = half_vector(wb, wo)
         phase = s.microfacet.D(h) / (4.0 * dr.fmax(projected_area(s, wb), AREA_MIN))
@@ -323,16 +331,16 @@ def sample(s: Surface, wi, fresnel: Callable, rng):
     def body(w, tau, weight, rng, k, inside):
         u = rng.next_float32(), rng.next_float32(), rng.next_float32()
         tau = _free_flight(s, w, tau, u[0])
-        inside &= ~((w.z > 0.0) & (tau <= 0.0))
+        inside = inside & ((w.z <= 0.0) | (tau > 0.0))
         wn, f = _bounce(s, -w, fresnel, u[1], u[2])
         w = dr.select(inside, wn, w)
         weight = dr.select(inside, weight * f, weight)
-        return w, tau, weight, rng, k + dr.select(inside, 1, 0), inside
+        return w, tau, weight, rng, dr.select(inside, k + 1, k), inside
 
     state = (-wi, dr.zeros(mi.Float), one, rng, mi.UInt32(0), mi.Bool(True))
-    w, _, weight, _, _, inside = dr.while_loop(
+    w, tau, weight, _, _, _ = dr.while_loop(
         state, lambda *a: a[5] & (a[4] <= MAX_BOUNCES), body, label="walk_sample")
-    left = ~inside & (w.z > 0.0)
+    left = (w.z > 0.0) & (tau <= 0.0)          # (else still inside after MAX_BOUNCES)
     return w, dr.select(left, weight, 0.0)
 
 

@@ -259,9 +259,13 @@ def stream(*values):
 # ----------------------------------------------------------------------------
 
 def _unit(fresnel: Callable):
-    """The type of a path's weight (a Float, or a colour for a coloured F), and 1 of it."""
+    """The type of a path's weight (a Float, or a colour for a coloured F), and
+    1 of it: the Python number 1 where F is the number 1 (no factor to trace;
+    a loop variable that never changes is refused when a renderer's own loop
+    records the walk's loop again)."""
     kind = type(fresnel(mi.Float(1.0)))
-    kind = mi.Float if kind in (float, int) else kind
+    if kind in (float, int):
+        return mi.Float, 1.0
     return kind, dr.ones(kind) if dr.is_jit_v(mi.Float) else kind(1.0)
 
 
@@ -334,7 +338,8 @@ def sample(s: Surface, wi, fresnel: Callable, rng):
         inside = inside & ((w.z <= 0.0) | (tau > 0.0))
         wn, f = _bounce(s, -w, fresnel, u[1], u[2])
         w = dr.select(inside, wn, w)
-        weight = dr.select(inside, weight * f, weight)
+        if type(weight) is not float:
+            weight = dr.select(inside, weight * f, weight)
         return w, tau, weight, rng, dr.select(inside, k + 1, k), inside
 
     state = (-wi, dr.zeros(mi.Float), one, rng, mi.UInt32(0), mi.Bool(True))

@@ -259,14 +259,15 @@ def stream(*values):
 # ----------------------------------------------------------------------------
 
 def _unit(fresnel: Callable):
-    """The type of a path's weight (a Float, or a colour for a coloured F), and
-    1 of it: the Python number 1 where F is the number 1 (no factor to trace;
-    a loop variable that never changes is refused when a renderer's own loop
-    records the walk's loop again)."""
-    kind = type(fresnel(mi.Float(1.0)))
-    if kind in (float, int):
-        return mi.Float, 1.0
-    return kind, dr.ones(kind) if dr.is_jit_v(mi.Float) else kind(1.0)
+    """The type of a path's weight (a Float, or a colour for a coloured F), 1
+    of it, and whether F is the constant 1: then the weight is the Python
+    number 1 and no factor is traced (a loop variable that never changes is
+    refused when a renderer's own loop records the walk's loop again)."""
+    f = fresnel(mi.Float(0.5))
+    if type(f) in (float, int) and f == 1.0 and dr.is_jit_v(mi.Float):
+        return mi.Float, 1.0, True
+    kind = mi.Float if type(f) in (float, int) else type(f)
+    return kind, dr.ones(kind) if dr.is_jit_v(mi.Float) else kind(1.0), False
 
 
 def _free_flight(s: Surface, w, tau, u):
@@ -286,7 +287,7 @@ def _bounce(s: Surface, wb, fresnel, u1, u2):
 def scattered(s: Surface, wi, wo, fresnel: Callable, rng):
     """X: the bounces k >= 2 of the walk from wi, by next-event estimation
     toward wo; its expectation is the multiple scattering's f·cos θ_o."""
-    kind, one = _unit(fresnel)
+    kind, one, constant = _unit(fresnel)
     up = wo.z > 0.0
 
     def body(w, tau, weight, total, rng, k, inside):
@@ -299,7 +300,8 @@ def scattered(s: Surface, wi, wo, fresnel: Callable, rng):
         seen = inside & up & (k >= 1)
         total += dr.select(seen, weight * (fresnel(dot(wb, h)) * phase * masking(s, wo, tau)), 0.0)
         w, f = _bounce(s, wb, fresnel, u[1], u[2])
-        weight = weight * f
+        if not constant:
+            weight = weight * f
         return w, tau, weight, total, rng, k + 1, inside
 
     state = (-wi, dr.zeros(mi.Float), one, dr.zeros(kind), rng, mi.UInt32(0), mi.Bool(True))
@@ -330,7 +332,7 @@ def evaluate(s: Surface, wi, wo, fresnel: Callable, uv):
 def sample(s: Surface, wi, fresnel: Callable, rng):
     """(wo, weight): the direction in which the walk from wi leaves, and the
     product of its Fresnel factors (0 if still inside after MAX_BOUNCES)."""
-    kind, one = _unit(fresnel)
+    kind, one, constant = _unit(fresnel)
 
     def body(w, tau, weight, rng, k, inside):
         u = rng.next_float32(), rng.next_float32(), rng.next_float32()
@@ -338,7 +340,7 @@ def sample(s: Surface, wi, fresnel: Callable, rng):
         inside = inside & ((w.z <= 0.0) | (tau > 0.0))
         wn, f = _bounce(s, -w, fresnel, u[1], u[2])
         w = dr.select(inside, wn, w)
-        if type(weight) is not float:
+        if not constant:
             weight = dr.select(inside, weight * f, weight)
         return w, tau, weight, rng, dr.select(inside, k + 1, k), inside
 

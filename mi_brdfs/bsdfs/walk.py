@@ -102,6 +102,8 @@ Q_MIN = 0.1               # the least weight of the pdf's cosine lobe
 NEWTON_STEPS = 20         # safeguarded Newton steps of the Beckmann visible slope
 SLOPE_TAIL = 6.0          # the slope bracket reaches this far into the Gaussian tail
 AREA_MIN = 1e-30          # a projected area's floor where it divides
+DEN_MIN = 1e-18           # a denominator's floor whose square (its derivative) is normal
+A_MAX = 9.0               # Beckmann: |cot θ / α| beyond which A(w) is max(z, 0) in float32
 INV_SQRT_PI = 1.0 / math.sqrt(math.pi)
 
 
@@ -141,12 +143,16 @@ def projected_area(s: Surface, w):
     Beckmann z erfc(-z/r)/2 + r exp(-z²/r²)/(2 sqrt π); below the horizon in
     forms that keep their relative precision (no cancellation of two terms)."""
     z = w.z
-    r = dr.sqrt(dr.square(s.ax * w.x) + dr.square(s.ay * w.y))
+    # (safe_sqrt: a finite derivative at r = 0, along the normal)
+    r = dr.safe_sqrt(dr.square(s.ax * w.x) + dr.square(s.ay * w.y))
     if s.kind == "ggx":
         h = dr.sqrt(dr.fma(z, z, r * r))
-        below = r * r / dr.fmax(2.0 * (h - z), AREA_MIN)
+        below = r * r / (2.0 * dr.select(z < 0.0, h - z, 1.0))   # (h - z >= 2|z| there)
         return dr.select(z >= 0.0, 0.5 * (z + h), below)
-    a = z / dr.fmax(r, AREA_MIN)
+    # |a| <= A_MAX: beyond, erfc(|a|) and e^(-a²) are 0 in float32 (and a² would
+    # overflow, its derivative with it); r held >= |z|/A_MAX so that the
+    # division's derivative stays finite
+    a = z / dr.fmax(r, dr.fmax(dr.abs(z) * (1.0 / A_MAX), AREA_MIN))
     gauss = dr.exp(-a * a)
     # z >= 0: z (1 - erfc(a)/2) + r e^(-a²)/(2 sqrt π); z < 0: e^(-a²) (r/(2 sqrt π) + z erfcx(-a)/2)
     x = dr.abs(a)
@@ -316,7 +322,9 @@ def single(s: Surface, wi, wo, fresnel: Callable):
     """f_1·cos θ_o, the height-correlated single scattering (see the module doc)."""
     h = half_vector(wi, wo)
     den = wo.z * projected_area(s, -wi) + wi.z * projected_area(s, wo)
-    return fresnel(dot(wi, h)) * (s.microfacet.D(h) * wo.z / (4.0 * dr.fmax(den, AREA_MIN)))
+    ok = den > DEN_MIN               # (0 only with both directions on the horizon)
+    value = s.microfacet.D(h) * wo.z / (4.0 * dr.select(ok, den, 1.0))
+    return fresnel(dot(wi, h)) * dr.select(ok, value, 0.0)
 
 
 def evaluate(s: Surface, wi, wo, fresnel: Callable, uv):

@@ -439,8 +439,8 @@ class CookTorrance(BRDF):
                    "facet, evaluated and sampled stochastically by the random walk itself "
                    "(Heitz et al. 2016; :mod:`mi_brdfs.bsdfs.walk`): noisy, unbiased, the "
                    'plugin\'s Fresnel form at every bounce. Needs ``geometry="smith"``, '
-                   '``beckmann`` or ``ggx``, ``mode="hdr"``, ``base="lambert"``, no '
-                   "``energy_compensation``."),
+                   '``beckmann`` or ``ggx`` (isotropic or anisotropic), ``mode="hdr"``, '
+                   '``base="lambert"``, no ``energy_compensation``.'),
     )
     PARAMS = (
         Param("diffuse_reflectance", 0.5, doc="m_D; above 1 allowed (scanline mode clamps)."),

@@ -48,8 +48,8 @@ expectation is f_ms·cos θ_i, the walk's BRDF being reciprocal), and take
     \hat f_{ms} = \frac{X + Y}{\cos\theta_i + \cos\theta_o},
 
 the weights cos θ_o/(cos θ_i + cos θ_o) on X/cos θ_o and cos θ_i/(...) on
-Y/cos θ_i: unbiased, no 1/cos θ of a grazing end (a one-sided walk toward a
-grazing light has variance ~ 1/cos θ when divided by it), and, since the
+Y/cos θ_i: unbiased, no division by the cosine of a grazing end (which
+estimating f from Y alone would need), and, since the
 random numbers of the walk from a toward b are a hash of (a, b, si.uv),
 **reciprocal per evaluation** to float precision, not only in expectation.
 Two walks per call: twice the cost of one.
@@ -81,6 +81,10 @@ MIS stays unbiased: its weights need only sum to 1 over the strategies, and
 ``pdf``, ``eval_pdf`` and ``BSDFSample3f.pdf`` give the same p̃. A χ² test of
 the sampler against p̃ must fail; the tests compare the sampler with ``eval``
 instead (and both with the NumPy walk).
+
+**Derivatives**: the single scattering and p̃ are differentiated; the walks
+run under ``dr.suspend_grad`` (their part of eval and the sample weights are
+constants to an optimiser).
 
 Traced code: Dr.Jit only (one symbolic loop per walk with a bounce cap,
 masks and ``dr.select``), every function of local directions; ``kind`` is

@@ -135,7 +135,7 @@ import mitsuba as mi
 import numpy as np
 
 from .._binding import create
-from . import compensation, fresnel, lambert, microfacet as mf
+from . import compensation, fresnel, lambert, microfacet as mf, walk
 from .base import BRDF, Effective, rgb_list, schlick
 from .cases import (THETAS_GRAZING, THETAS_LOW, Cases, Chi2, Furnace, Pictures, Twin, preserves,
                     rgb)
@@ -354,6 +354,7 @@ def walk_residual(distribution: str, geometry: str,
 # The Fresnel forms (:mod:`.fresnel`) and the parameters each reads beyond
 # ``f0`` (``material`` stands for ``eta`` and ``kappa``).
 FRESNELS = ("schlick", "conductor", "dielectric", "f82")
+MULTIPLE_SCATTERING = ("none", "walk")
 BASES = ("lambert", "plastic")
 FRESNEL_PARAMS = {"schlick": (), "conductor": ("eta", "kappa"),
                   "dielectric": ("int_ior", "ext_ior"), "f82": ("f82_tint",)}
@@ -440,6 +441,14 @@ class CookTorrance(BRDF):
         Option("sample_visible", True,
                doc="Beckmann and GGX: sample the visible normals (else the full distribution "
                    "D(m)·cos θ_m); Blinn always samples the latter."),
+        Option("multiple_scattering", "none", MULTIPLE_SCATTERING,
+               doc='``"none"``: the lecture\'s single scattering; ``"walk"``: the specular '
+                   "lobe is the Smith microsurface's full BRDF, light reflected from facet to "
+                   "facet, evaluated and sampled stochastically by the random walk itself "
+                   "(Heitz et al. 2016; :mod:`mi_brdfs.bsdfs.walk`): noisy, unbiased, the "
+                   'plugin\'s Fresnel form at every bounce. Needs ``geometry="smith"``, '
+                   '``beckmann`` or ``ggx`` (isotropic or anisotropic), ``mode="hdr"``, '
+                   '``base="lambert"``, no ``energy_compensation``.'),
     )
     PARAMS = (
         Param("diffuse_reflectance", 0.5, doc="m_D; above 1 allowed (scanline mode clamps)."),
@@ -509,6 +518,8 @@ class CookTorrance(BRDF):
                                "under the interface is measured: the walk is the conductor's)")
         if self.options.base == "plastic":
             self.check_plastic(reader)
+        if self.options.multiple_scattering == "walk":
+            self.check_walk(reader)
         if "material" in props:
             self.read_material(reader)
         for name in ("int_ior", "ext_ior"):
@@ -556,6 +567,21 @@ class CookTorrance(BRDF):
             name = "alpha_u" if "alpha_u" in props else "alpha_v"
             raise reader.error(name, props[name], 'alpha with base="plastic" (isotropic, as '
                                "roughplastic)")
+
+    def check_walk(self, reader: Reader) -> None:
+        """multiple_scattering="walk": the microsurface the walk is of, or one line why not."""
+        o = self.options
+        needs = (("geometry", o.geometry, ("smith",), "the walk is on Smith's microsurface"),
+                 ("distribution", o.distribution, ("beckmann", "ggx"), "the walk's microsurfaces"),
+                 ("mode", o.mode, ("hdr",), "the walk is radiometric"),
+                 ("base", o.base, ("lambert",), "the walk is the specular lobe of a conductor"),
+                 ("energy_compensation", o.energy_compensation, (False,),
+                  "the walk already holds every bounce"))
+        for name, value, wanted, why in needs:
+            if value not in wanted:
+                valid = " or ".join(f'"{w}"' if isinstance(w, str) else str(w).lower()
+                                    for w in wanted)
+                raise reader.error(name, value, f'{valid} with multiple_scattering="walk" ({why})')
 
     def update_plastic(self) -> None:
         """The transmittance table and internal reflectance of the interface at
@@ -709,6 +735,8 @@ class CookTorrance(BRDF):
         return Scaled(m_d / (1.0 - inner), ratio * (cos_o * (1.0 / math.pi)), ratio)
 
     def eval_specular(self, inp, si, wo):
+        if self.options.multiple_scattering == "walk":
+            return walk.lobe(self, inp, si, wo)
         h = half_vector(si.wi, wo)
         return self.specular_lobe(inp, si, wo, h, inp.microfacet.D(h))
 
@@ -716,14 +744,26 @@ class CookTorrance(BRDF):
         return sample_specular(si.wi, sample2, inp.microfacet)
 
     def pdf_specular(self, inp, si, wo):
+        if self.options.multiple_scattering == "walk":
+            return walk.lobe_pdf(inp, si, wo)
         return pdf_specular(si.wi, wo, inp.microfacet)
 
     def eval_pdf_specular(self, inp, si, wo):
+        if self.options.multiple_scattering == "walk":
+            return walk.lobe(self, inp, si, wo), walk.lobe_pdf(inp, si, wo)
         # the half vector and D shared (see the module's eval_pdf_specular)
         h = half_vector(si.wi, wo)
         D = inp.microfacet.D(h)
         return self.specular_lobe(inp, si, wo, h, D), \
             inp.microfacet.reflection_pdf(si.wi, wo, h, D)
+
+    def sample(self, ctx, si, sample1, sample2, active=True):
+        # the walk's sample weighs its own path, not eval/pdf (walk.sample_bsdf)
+        plan = self.state.plan
+        if self.options.multiple_scattering == "walk" and not plan.cosine \
+                and self.enabled(ctx).specular:
+            return walk.sample_bsdf(self, ctx, si, sample1, sample2, active)
+        return super().sample(ctx, si, sample1, sample2, active)
 
     def selection_weights(self, inp, si):
         w_d = w_s = mi.Float(0.0)

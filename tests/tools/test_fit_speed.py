@@ -55,11 +55,12 @@ SCENES = Path(__file__).resolve().parents[2] / "scenes"
 
 
 def test_parallel_loading_gives_the_same_render_as_serial_loading():
-    """Mitsuba loads a scene's objects in worker threads by default; the
-    course plugins make their parts without the loader (_binding.create), so
-    the render command, the bench and the fit load in parallel. The course
-    scene (every plugin, the largest) renders the same either way, in fresh
-    processes (a corrupted object shows as an error or another image)."""
+    """Mitsuba loads a scene's objects in worker threads by default (a user's
+    script does); the course plugins make their parts without the loader
+    (_binding.create). The course scene (every plugin, the largest) renders
+    the same either way, in fresh processes (a corrupted object shows as an
+    error or another image). The project's commands still load serially: see
+    the comment in tools/render.py."""
     script = ("import sys, numpy as np, mitsuba as mi; mi.set_variant('llvm_ad_rgb');"
               "import mi_brdfs; mi_brdfs.register();"
               f"s = mi.load_file({str(SCENES / 'course.xml')!r}, parallel=sys.argv[1] == '1',"

@@ -107,7 +107,7 @@ def call_anatomy(bsdf, method: str, x: dict) -> dict:
 def calls_in_a_render(config: dict) -> dict[str, list[int]]:
     """Per BSDF method: [calls from outside the plugins (Mitsuba's), all calls]
     of one plugin instance while one path-traced render (depth 3) is traced."""
-    scene = mi.load_dict(scene_dict(config, 8, plane=False))
+    scene = mi.load_dict(scene_dict(config, 8, plane=False), parallel=False)
     stats = profile(lambda: render_waited(scene, 1, seed=0))
     counts = {m: [0, 0] for m in BSDF_METHODS}
     for key, (_, nc, _, _, callers) in stats.items():

@@ -59,7 +59,8 @@ def materials(twin: str, side: str, n: int, res: int, spp: int, repeats: int) ->
     renders, each split into tracing, code generation and kernel execution (s),
     and the median of ``repeats`` replays of a frozen render."""
     start = time.perf_counter()
-    scene = mi.load_dict(spheres_scene(twin, side, n, res))      # parallel, as the render command
+    # parallel=False as in the render command (see its comment in tools/render.py)
+    scene = mi.load_dict(spheres_scene(twin, side, n, res), parallel=False)
     result = {"load_s": time.perf_counter() - start}
     first = measured(lambda: render_waited(scene, spp, seed=0))
     warm = [measured(lambda: render_waited(scene, spp, seed=r + 1)) for r in range(repeats)]
@@ -83,7 +84,7 @@ def passes(n: int, res: int, spp: int, passes: int, freeze: bool, repeats: int) 
     (cook_torrance as roughconductor): the first call in the process (what
     ``mi-brdfs render`` does) and the median of the next."""
     twin = next(t for t in cases.twins() if t.spread is not None)
-    scene = mi.load_dict(spheres_scene(twin.label, "plugin", n, res))
+    scene = mi.load_dict(spheres_scene(twin.label, "plugin", n, res), parallel=False)
     messages: list[str] = []
     times = []
     for r in range(repeats + 1):

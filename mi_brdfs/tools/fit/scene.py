@@ -103,7 +103,7 @@ def render_views(make, res: int, spp: int, seed: int = 0) -> dict[str, np.ndarra
     and each scene is released before the next is loaded."""
     images = {}
     for view in VIEWS:
-        scene = mi.load_dict(scene_dict(make(), res, view))
+        scene = mi.load_dict(scene_dict(make(), res, view), parallel=False)   # as tools/render.py
         images[view] = render(scene, spp, seed)
         del scene
         release()

@@ -757,13 +757,12 @@ class CookTorrance(BRDF):
         return self.specular_lobe(inp, si, wo, h, D), \
             inp.microfacet.reflection_pdf(si.wi, wo, h, D)
 
-    def sample(self, ctx, si, sample1, sample2, active=True):
+    def own_sample(self, ctx):
         # the walk's sample weighs its own path, not eval/pdf (walk.sample_bsdf)
-        plan = self.state.plan
-        if self.options.multiple_scattering == "walk" and not plan.cosine \
+        if self.options.multiple_scattering == "walk" and not self.state.plan.cosine \
                 and self.enabled(ctx).specular:
-            return walk.sample_bsdf(self, ctx, si, sample1, sample2, active)
-        return super().sample(ctx, si, sample1, sample2, active)
+            return walk.sample_bsdf
+        return None
 
     def selection_weights(self, inp, si):
         w_d = w_s = mi.Float(0.0)

@@ -263,7 +263,17 @@ class Mixture:
                      for u, w in zip(use, weights))
 
     # --- the BSDF interface (see the module's docstring) -------------------------
+    def own_sample(self, ctx):
+        """The sampler of a plugin whose lobe weighs its own samples, not by
+        eval/pdf (a stochastic lobe: ``cook_torrance``'s walk,
+        :func:`.walk.sample_bsdf`), called as ``sample`` is; None (the
+        default): :meth:`sample` below."""
+        return None
+
     def sample(self, ctx, si, sample1, sample2, active=True):
+        own = self.own_sample(ctx)
+        if own is not None:
+            return own(self, ctx, si, sample1, sample2, active)
         sample1, sample2 = as_type(sample1, mi.Float), as_type(sample2, mi.Point2f)
         use = self.enabled(ctx)
         if not any(use):

@@ -34,7 +34,7 @@ DOCS = Path(__file__).resolve().parent.parent
 ROOT = DOCS.parent
 REPORTS = {"validation": DOCS / "validation",          # site folder -> committed report
            "trade": DOCS / "benchmarks" / "trade",
-           "scene-fit": DOCS / "benchmarks" / "scene-fit"}       # fit --scene: one per scene
+           "scene-fit": DOCS / "scene-fit"}       # fit --scene: one per scene
 
 
 def write_if_changed(path: Path, text: str) -> None:

@@ -432,3 +432,12 @@ def test_report_headers_and_titles_are_words():
     assert report.header("builtin_compile_s") == "built-in compile (s)"
     assert report.header("plugin_peak_mib") == "plugin peak memory (MiB)"
     assert set(report.TITLES) == set(bench.GROUPS)
+
+
+def test_the_committed_benchmarks_folder_takes_a_new_run():
+    """docs/benchmarks holds the bench's report only (another command's report
+    in it, such as fit --scene's, made `bench -o docs/benchmarks`, the
+    command the benchmarks guide gives, refuse the folder)."""
+    from mi_brdfs.tools import destinations
+    folder = os.path.join(os.path.dirname(__file__), "..", "..", "docs", "benchmarks")
+    destinations.check_report_dir(folder)

@@ -186,7 +186,7 @@ def test_an_output_that_is_a_file_is_refused_and_kept(tmp_path, capsys):
 
 
 ROOT = Path(__file__).resolve().parents[2]
-COMMITTED = ROOT / "docs" / "benchmarks" / "scene-fit"
+COMMITTED = ROOT / "docs" / "scene-fit"
 
 
 @pytest.mark.parametrize("name", ["cornell-box", "course", "several"])

@@ -48,7 +48,7 @@ def test_cost_classes_are_a_total_order_with_a_5_percent_band():
             assert rank.cheaper(a, c)
         assert sum([rank.cheaper(a, b), rank.cheaper(b, a), rank.equal_cost(a, b)]) == 1
     assert math.isinf(rank.cost_class(fit("x", 0.1)))
-    assert rank.COST_BAND == task.FULL.cost_tolerance == task.QUICK.cost_tolerance   # the aim
+    assert task.FULL.cost_tolerance == task.QUICK.cost_tolerance           # the timing's aim
     assert rank.CLOSED == pytest.approx(1 + task.FULL.cost_tolerance)
 
 
@@ -130,7 +130,7 @@ def test_the_verdict_names_a_cheaper_model_only_if_it_looks_the_same():
 
 
 def test_the_verdict_says_when_the_timing_did_not_close_or_the_machine_was_loaded():
-    """An interval wider than 1.05 after the round cap, and a load average
+    """An interval wider than 1.10 after the round cap, and a load average
     above the cores, are said in words with the load; a quiet, closed timing
     gets only its load."""
     same = {"noise_ratio": 1.0, "noise_low": 1.0, "noise_high": 1.0}      # time per sample alone
@@ -138,13 +138,16 @@ def test_the_verdict_says_when_the_timing_did_not_close_or_the_machine_was_loade
              fit("b", 0.30, 0.5, 0.49, 0.51, cost_load=0.6, cost_cores=2, cost_rounds=6, **same)]
     line = rank.verdict(quiet, "p")
     assert line.endswith(". Costs timed at load average 0.4–0.6 on 2 cores.")
-    loaded = [fit("a", 0.05, 1.0, 0.90, 1.12, cost_load=5.2, cost_cores=2, cost_rounds=40, **same),
+    loaded = [fit("a", 0.05, 1.0, 0.90, 1.12, cost_load=5.2, cost_cores=2, cost_rounds=12,
+                  cost_aim=1.1, **same),
               fit("b", 0.30, 0.5, 0.49, 0.51, cost_load=4.0, cost_cores=2, cost_rounds=6, **same)]
     line = rank.verdict(loaded, "p")
     assert "load average 4.0–5.2 on 2 cores (the machine was loaded" in line
-    assert "a's interval did not close (high/low 1.244 after 40 rounds, aim ≤ 1.05)" in line
+    assert "a's interval did not close (high/low 1.244 after 12 rounds, aim ≤ 1.1)" in line
     assert rank.closed(fit("x", 0.1, 1.0, 0.99, 1.01)) and not rank.closed(
-        fit("x", 0.1, 1.0, 0.95, 1.05))
+        fit("x", 0.1, 1.0, 0.96, 1.05))            # 1.094: above the aim of a record naming none
+    assert rank.closed(fit("x", 0.1, 1.0, 0.96, 1.05, cost_aim=1.1))
+    assert not rank.closed(fit("x", 0.1, 1.0, 0.95, 1.05, cost_aim=1.1))         # 1.105
 
 
 @pytest.mark.parametrize("flips, expected", [((0.200, 0.102, 0.100), ["y", "z", "x"])])

@@ -59,7 +59,7 @@ FIELDS = ("target", "model", "plugin", "rank", "parameters", "image_flip", "imag
           "cost_high", "ops_ratio", "seconds")
 EXTRA = ("image_views", "image_noise_flip", "image_noise_relmse", "noise_ratio", "noise_low",
          "noise_high", "noise_seeds", "noise_spp", "time_to_noise", "effective", "albedo",
-         "target_albedo", "cost_rounds", "cost_closed", "cost_load", "cost_cores", "ops",
+         "target_albedo", "cost_rounds", "cost_closed", "cost_aim", "cost_load", "cost_cores", "ops",
          "cost_timing", "reruns", "worker",
          "target_features", "xml", "renders", "start_errors", "error", "cost_error")
 CSV_EXTRA = ("effective", "image_noise_flip", "noise_ratio", "noise_low", "noise_high",
@@ -87,7 +87,8 @@ def write(out: str, records: list[dict], settings, command: str, features: dict 
     failed fits last), each with its ``rank``."""
     timed = [r for r in records if r.get("cost_ratio") is not None]
     if timed and "cost_timing" not in timed[0]:   # records timed before cost_timing existed:
-        settings = settings.replace(cost_timing="wall", cost_rounds=(6, 40))  # by wall clock
+        settings = settings.replace(cost_timing="wall", cost_rounds=(6, 40),  # by wall clock
+                                    cost_tolerance=rank.EARLIER_AIM - 1.0)
     by_target: dict[str, list[dict]] = {}
     for r in records:
         by_target.setdefault(r["target_name"], []).append(r)

@@ -401,7 +401,7 @@ class Inputs(NamedTuple):
     colour_d: Spectrum | None       # m_D, where the diffuse lobe is present
     colour_s: Spectrum | None       # m_S, where the specular lobe is present
     microfacet: Microfacet          # D and G at the point's roughness
-    f0: Float                       # F0 (also the compensation's table axis)
+    f0: Float | Spectrum | float    # F0 at the point (:meth:`CookTorrance.eval_f0`)
     fresnel: tuple = ()             # what the Fresnel form reads beyond F0, at the point
     t_i: Float | None = None        # base="plastic": the transmittance t(cos θ_i)
     f0_walk: Float | Spectrum | None = None   # compensated: the walk tables' F0 (per channel)
@@ -456,8 +456,13 @@ class CookTorrance(BRDF):
               "Mitsuba's ``specular_reflectance``); the Fresnel term is the reflectance."),
         Param("k", 0.5, 0.0, 1.0, kind="float", role="weight",
               doc="the weight of the diffuse lobe; the specular lobe gets 1 - k."),
-        Param("f0", 0.04, 0.0, 1.0, kind="float", role="weight",
-              doc="F_0 of Schlick's Fresnel approximation."),
+        Param("f0", 0.04, 0.0, 1.0, role="weight",
+              doc='F_0 of Schlick\'s Fresnel approximation (``fresnel="schlick"`` and '
+                  '``"f82"``): one number, as the lecture\'s, or a colour, a texture or a '
+                  "spectrum (per colour channel, per wavelength in spectral variants), as "
+                  "``f82_tint``. A number gives F one value, as before; a colour or a "
+                  "texture gives F per channel, which multiplies m_S (e.g. gold's F_0 "
+                  "≈ (1.0, 0.78, 0.34))."),
         Param("eta", 0.0, 0.0, None, role="shape", upper=3.0, optional=True,
               doc='``fresnel="conductor"``: η, the real part of the conductor\'s index of '
                   "refraction (a colour, or a spectrum), as ``roughconductor``'s ``eta``; "
@@ -667,10 +672,36 @@ class CookTorrance(BRDF):
             t_i = self.transmittance(mi.Frame3f.cos_theta(si.wi))
         inp = Inputs(self.colour("diffuse_reflectance", "diffuse", si, active),
                      self.colour("specular_reflectance", "specular", si, active),
-                     microfacet, self.m_f0, reads, t_i)
+                     microfacet, self.eval_f0(si, active), reads, t_i)
         if self.state.plan.lobes.multiple:             # (the plan holds the compensation)
             inp = inp._replace(f0_walk=self.walk_f0(inp))
         return inp
+
+    def f0_form(self) -> str:
+        """How F0 is read (decided with the lobes, :meth:`update_lobes`):
+        ``"one"``, the constant 1 (F = 1: nothing traced, as a plain number 1 is
+        folded); ``"grey"``, one number over the surface (a ``uniform``: F a
+        Float, the lecture's path); ``"colour"``, per channel or per point (a
+        colour, a spectrum, a texture: F a colour, see :meth:`coloured`)."""
+        if self.off("f0", 1.0):
+            return "one"
+        return "grey" if self.m_f0.class_name() == "UniformSpectrum" else "colour"
+
+    def eval_f0(self, si, active):
+        """F0 at the point, as :meth:`f0_form` decided: 1, a Float or a colour."""
+        form = self.state.f0
+        if form == "one":
+            return 1.0
+        if form == "grey":
+            return self.m_f0.eval_1(si, active)
+        return self.m_f0.eval(si, active)
+
+    def update_lobes(self) -> None:
+        self.state.f0 = self.f0_form()    # first: the compensation's preparation reads it
+        super().update_lobes()
+
+    def trace_key(self) -> tuple:
+        return super().trace_key() + (self.state.f0,)
 
     def walk_f0(self, inp):
         """The F0 at which the random walk's tables (Schlick's F at every
@@ -685,7 +716,7 @@ class CookTorrance(BRDF):
         elif form == "conductor":
             f_avg = fresnel.conductor_average(*inp.fresnel)
         else:
-            f_avg = fresnel.f82_average(self.switch("f0"), inp.fresnel[0])
+            f_avg = fresnel.f82_average(inp.f0, inp.fresnel[0])
         return fresnel.schlick_equivalent(f_avg)
 
     def transmittance(self, cos_theta):
@@ -693,20 +724,22 @@ class CookTorrance(BRDF):
         return self.state.plastic(dr.fmin(dr.fmax(cos_theta, 0.0), 1.0), data=self.m_plastic_t)
 
     def fresnel(self, inp, c):
-        """F at c = ω_r·h by the chosen form: a Float (``schlick``, ``dielectric``)
-        or a colour (``conductor``, ``f82``), see :meth:`coloured`."""
+        """F at c = ω_r·h by the chosen form: a Float (``schlick`` with one number
+        ``f0``, ``dielectric``) or a colour (``schlick`` with a colour or textured
+        ``f0``, ``conductor``, ``f82``), see :meth:`coloured`."""
         form = self.options.fresnel
         if form == "schlick":
-            return fresnel.schlick(self.switch("f0"), c)
+            return fresnel.schlick(inp.f0, c)
         if form == "dielectric":
             return fresnel.dielectric(inp.fresnel[0], c)
         if form == "conductor":
             return fresnel.conductor(inp.fresnel[0], inp.fresnel[1], c)
-        return fresnel.f82(self.switch("f0"), inp.fresnel[0], c)
+        return fresnel.f82(inp.f0, inp.fresnel[0], c)
 
     def coloured(self) -> bool:
         """True if F is a colour: it multiplies m_S then, the lobe's shape stays a Float."""
-        return self.options.fresnel in ("conductor", "f82")
+        return self.options.fresnel in ("conductor", "f82") or \
+            (self.options.fresnel == "schlick" and self.state.f0 == "colour")
 
     def specular_lobe(self, inp, si, wo, h, D):
         """m_S D F G / (4 cos θ_i) as a colour times a shape, with its ratio to the pdf."""
@@ -784,13 +817,14 @@ class CookTorrance(BRDF):
 
     @classmethod
     def effective(cls, values: dict, cos_theta: float) -> Effective:
-        """k·m_D, and (1 - k)·m_S·F(θ) with Schlick's F."""
-        k, f0 = float(values["k"]), float(values["f0"])
+        """k·m_D, and (1 - k)·m_S·F(θ) with Schlick's F (per channel for a colour ``f0``)."""
+        k = float(values["k"])
         notes = ((f"k = {k:.2g}: diffuse_reflectance has no effect",) if k < 1e-3 else ()) \
             + ((f"k = {k:.4g}: the specular lobe has no effect",) if k > 1.0 - 1e-3 else ())
+        F = rgb_list(schlick(rgb_list(values["f0"]), cos_theta))
         return Effective(rgb_list(values["diffuse_reflectance"], k),
-                         rgb_list(values["specular_reflectance"],
-                                  (1.0 - k) * schlick(f0, cos_theta)), notes)
+                         [m * ((1.0 - k) * f)
+                          for m, f in zip(rgb_list(values["specular_reflectance"]), F)], notes)
 
     # --- energy compensation: what single scattering misses of the random walk ---
     def compensation(self) -> compensation.Compensation:

@@ -1023,6 +1023,21 @@ class CookTorrance(BRDF):
                                {"fresnel": "f82", "f0": 0.0, "f82_tint": 0.0},
                                {"fresnel": "f82", "f0": 1.0, "f82_tint": 0.0})
                      for a in (1e-4, 1.0) for k in (0.0, 0.5) for g in mf.GEOMETRIES]
+        # A colour F0 with Schlick's F (issue 35): F a colour, which weighs the lobe's
+        # selection too; with a diffuse lobe beside and alone, compensated per channel.
+        gold = {**c, "f0": rgb([0.95, 0.64, 0.2]), "distribution": "ggx", "geometry": "smith",
+                "alpha": 0.3}
+        chi2 += [Chi2({**gold, "k": 0.3}, (0, 60, 85)),
+                 Chi2({**gold, "distribution": "beckmann", "k": 0.0, "energy_compensation": True},
+                      (45,))]
+        consistency += [{**gold, "k": 0.4}, {**gold, "k": 0.0, "mode": "scanline"},
+                        {**gold, "k": 0.2, "energy_compensation": True}]
+        furnace += [Furnace(f"f0 a colour, ggx, smith, α = 0.3, k = 0{', compensated' * ec}",
+                            {**gold, "k": 0.0, "specular_reflectance": 1.0,
+                             "energy_compensation": ec}) for ec in (False, True)]
+        extremes += [{**gold, "f0": rgb([0.0, 1.0, 0.5]), "alpha": a, "k": k, **more}
+                     for a in (1e-4, 1.0) for k in (0.0, 0.5)
+                     for more in ({}, {"energy_compensation": True})]
         # roughplastic's base (its table of the interface's transmittance is not
         # differentiated: no gradient cases, as roughplastic's)
         plastic = {**c, "base": "plastic", "fresnel": "dielectric", "geometry": "smith"}
@@ -1072,6 +1087,7 @@ class CookTorrance(BRDF):
         consistency += compensated[::3]
         extremes += [{**cfg, "alpha": a} for cfg in compensated[:2] + compensated[4:6]
                      for a in (1e-4, 1e3)]
+        interior += [{**gold, "k": 0.4, "diffuse_reflectance": 0.5, "specular_reflectance": 0.7}]
         interior += [{**cfg, "energy_compensation": True} for cfg in interior]
         return Cases(
             chi2=chi2, consistency=consistency, furnace=furnace, extremes=extremes,
@@ -1100,6 +1116,7 @@ class CookTorrance(BRDF):
                for d in ("beckmann", "ggx")]
             + [{**c, **f, "distribution": "ggx", "geometry": "smith", "alpha": 0.3, "k": 0.2}
                for f in forms]
+            + [{**gold, "k": 0.2}, {**gold, "k": 0.0, "energy_compensation": True}]
             + [{**plastic, "distribution": "ggx", "alpha": 0.3, "mode": "hdr",
                 "diffuse_reflectance": rgb([0.8, 0.2, 0.1])}]
             + compensated[1::2],

@@ -23,12 +23,15 @@ Sampling: cosine hemisphere for the diffuse lobe; for the specular lobe the
 visible normals of Beckmann and GGX (Mitsuba's ``MicrofacetDistribution``) and
 D(m)·cos(theta_m) for Blinn; the lobe is picked in proportion to
 k·mean(m_D) (pi·k·mean(m_D) in scanline mode, whose Lambert term has no 1/pi)
-vs (1 - k)·mean(m_S)·Schlick(w_r·n). With k = 0 (or m_D = 0) there
+vs (1 - k)·mean(m_S·F(w_r·n)). With k = 0 (or m_D = 0) there
 is no diffuse lobe, with k = 1 (or m_S = 0) no specular one.
 
 **Fresnel** (``fresnel``, :mod:`mi_brdfs.bsdfs.fresnel`): the lecture's
-F is Schlick's, ``"schlick"`` (the default), F0 + (1 - F0)(1 - ω_r·h)^5 with one
-number ``f0``; a colour comes from m_S. The other forms are what it approximates:
+F is Schlick's, ``"schlick"`` (the default), F0 + (1 - F0)(1 - ω_r·h)^5 with
+``f0`` one number, as the lecture has it (F one value, m_S the colour), or a
+colour, a texture or a spectrum: F per channel (per wavelength in spectral
+variants), e.g. gold's F0 ≈ (1, 0.78, 0.34), whose hue goes to white at grazing
+angles as Schlick's curve does. The other forms are what it approximates:
 
 - ``"conductor"``: the exact reflectance of a conductor of complex index
   η + iκ, per colour channel (per wavelength in spectral variants), read as
@@ -47,7 +50,8 @@ number ``f0``; a colour comes from m_S. The other forms are what it approximates
   Schlick's curve with the reflectance near 82° set to ``f82_tint`` times
   Schlick's there, a colour, between Schlick and the exact conductor.
 
-With a coloured F (conductor, F82) the F of each direction multiplies m_S.
+With a coloured F (conductor, F82, Schlick with a colour ``f0``) the F of each
+direction multiplies m_S.
 Energy compensation takes every form: the random-walk tables, made with
 Schlick's F at every bounce, are read per channel (per wavelength in spectral
 variants) at the F0 whose Schlick curve has the form's hemispherical average
@@ -107,6 +111,18 @@ anisotropic microsurface (held beyond α = 3 on either axis).
         <float name="alpha" value="0.2"/>
         <string name="distribution" value="ggx"/>
         <string name="geometry" value="smith"/>
+    </bsdf>
+
+Schlick's F with a colour F0 (gold-ish; a texture or a ``<spectrum>`` too):
+
+.. code-block:: xml
+
+    <bsdf type="cook_torrance">
+        <float name="k" value="0"/>
+        <string name="geometry" value="smith"/>
+        <string name="distribution" value="ggx"/>
+        <rgb name="f0" value="1.0, 0.78, 0.34"/>
+        <float name="alpha" value="0.2"/>
     </bsdf>
 
 The exact conductor, as ``roughconductor`` with ``material`` gold:

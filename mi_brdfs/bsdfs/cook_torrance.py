@@ -23,12 +23,15 @@ Sampling: cosine hemisphere for the diffuse lobe; for the specular lobe the
 visible normals of Beckmann and GGX (Mitsuba's ``MicrofacetDistribution``) and
 D(m)·cos(theta_m) for Blinn; the lobe is picked in proportion to
 k·mean(m_D) (pi·k·mean(m_D) in scanline mode, whose Lambert term has no 1/pi)
-vs (1 - k)·mean(m_S)·Schlick(w_r·n). With k = 0 (or m_D = 0) there
+vs (1 - k)·mean(m_S·F(w_r·n)). With k = 0 (or m_D = 0) there
 is no diffuse lobe, with k = 1 (or m_S = 0) no specular one.
 
 **Fresnel** (``fresnel``, :mod:`mi_brdfs.bsdfs.fresnel`): the lecture's
-F is Schlick's, ``"schlick"`` (the default), F0 + (1 - F0)(1 - ω_r·h)^5 with one
-number ``f0``; a colour comes from m_S. The other forms are what it approximates:
+F is Schlick's, ``"schlick"`` (the default), F0 + (1 - F0)(1 - ω_r·h)^5 with
+``f0`` one number, as the lecture has it (F one value, m_S the colour), or a
+colour, a texture or a spectrum: F per channel (per wavelength in spectral
+variants), e.g. gold's F0 ≈ (1, 0.78, 0.34), whose hue goes to white at grazing
+angles as Schlick's curve does. The other forms are what it approximates:
 
 - ``"conductor"``: the exact reflectance of a conductor of complex index
   η + iκ, per colour channel (per wavelength in spectral variants), read as
@@ -47,7 +50,8 @@ number ``f0``; a colour comes from m_S. The other forms are what it approximates
   Schlick's curve with the reflectance near 82° set to ``f82_tint`` times
   Schlick's there, a colour, between Schlick and the exact conductor.
 
-With a coloured F (conductor, F82) the F of each direction multiplies m_S.
+With a coloured F (conductor, F82, Schlick with a colour ``f0``) the F of each
+direction multiplies m_S.
 Energy compensation takes every form: the random-walk tables, made with
 Schlick's F at every bounce, are read per channel (per wavelength in spectral
 variants) at the F0 whose Schlick curve has the form's hemispherical average
@@ -107,6 +111,18 @@ anisotropic microsurface (held beyond α = 3 on either axis).
         <float name="alpha" value="0.2"/>
         <string name="distribution" value="ggx"/>
         <string name="geometry" value="smith"/>
+    </bsdf>
+
+Schlick's F with a colour F0 (gold-ish; a texture or a ``<spectrum>`` too):
+
+.. code-block:: xml
+
+    <bsdf type="cook_torrance">
+        <float name="k" value="0"/>
+        <string name="geometry" value="smith"/>
+        <string name="distribution" value="ggx"/>
+        <rgb name="f0" value="1.0, 0.78, 0.34"/>
+        <float name="alpha" value="0.2"/>
     </bsdf>
 
 The exact conductor, as ``roughconductor`` with ``material`` gold:
@@ -401,7 +417,7 @@ class Inputs(NamedTuple):
     colour_d: Spectrum | None       # m_D, where the diffuse lobe is present
     colour_s: Spectrum | None       # m_S, where the specular lobe is present
     microfacet: Microfacet          # D and G at the point's roughness
-    f0: Float                       # F0 (also the compensation's table axis)
+    f0: Float | Spectrum | float    # F0 at the point (:meth:`CookTorrance.eval_f0`)
     fresnel: tuple = ()             # what the Fresnel form reads beyond F0, at the point
     t_i: Float | None = None        # base="plastic": the transmittance t(cos θ_i)
     f0_walk: Float | Spectrum | None = None   # compensated: the walk tables' F0 (per channel)
@@ -456,8 +472,13 @@ class CookTorrance(BRDF):
               "Mitsuba's ``specular_reflectance``); the Fresnel term is the reflectance."),
         Param("k", 0.5, 0.0, 1.0, kind="float", role="weight",
               doc="the weight of the diffuse lobe; the specular lobe gets 1 - k."),
-        Param("f0", 0.04, 0.0, 1.0, kind="float", role="weight",
-              doc="F_0 of Schlick's Fresnel approximation."),
+        Param("f0", 0.04, 0.0, 1.0, role="weight",
+              doc='F_0 of Schlick\'s Fresnel approximation (``fresnel="schlick"`` and '
+                  '``"f82"``): one number, as the lecture\'s, or a colour, a texture or a '
+                  "spectrum (per colour channel, per wavelength in spectral variants), as "
+                  "``f82_tint``. A number gives F one value, as before; a colour or a "
+                  "texture gives F per channel, which multiplies m_S (e.g. gold's F_0 "
+                  "≈ (1.0, 0.78, 0.34))."),
         Param("eta", 0.0, 0.0, None, role="shape", upper=3.0, optional=True,
               doc='``fresnel="conductor"``: η, the real part of the conductor\'s index of '
                   "refraction (a colour, or a spectrum), as ``roughconductor``'s ``eta``; "
@@ -667,10 +688,36 @@ class CookTorrance(BRDF):
             t_i = self.transmittance(mi.Frame3f.cos_theta(si.wi))
         inp = Inputs(self.colour("diffuse_reflectance", "diffuse", si, active),
                      self.colour("specular_reflectance", "specular", si, active),
-                     microfacet, self.m_f0, reads, t_i)
+                     microfacet, self.eval_f0(si, active), reads, t_i)
         if self.state.plan.lobes.multiple:             # (the plan holds the compensation)
             inp = inp._replace(f0_walk=self.walk_f0(inp))
         return inp
+
+    def f0_form(self) -> str:
+        """How F0 is read (decided with the lobes, :meth:`update_lobes`):
+        ``"one"``, the constant 1 (F = 1: nothing traced, as a plain number 1 is
+        folded); ``"grey"``, one number over the surface (a ``uniform``: F a
+        Float, the lecture's path); ``"colour"``, per channel or per point (a
+        colour, a spectrum, a texture: F a colour, see :meth:`coloured`)."""
+        if self.off("f0", 1.0):
+            return "one"
+        return "grey" if self.m_f0.class_name() == "UniformSpectrum" else "colour"
+
+    def eval_f0(self, si, active):
+        """F0 at the point, as :meth:`f0_form` decided: 1, a Float or a colour."""
+        form = self.state.f0
+        if form == "one":
+            return 1.0
+        if form == "grey":
+            return self.m_f0.eval_1(si, active)
+        return self.m_f0.eval(si, active)
+
+    def update_lobes(self) -> None:
+        self.state.f0 = self.f0_form()    # first: the compensation's preparation reads it
+        super().update_lobes()
+
+    def trace_key(self) -> tuple:
+        return super().trace_key() + (self.state.f0,)
 
     def walk_f0(self, inp):
         """The F0 at which the random walk's tables (Schlick's F at every
@@ -685,7 +732,7 @@ class CookTorrance(BRDF):
         elif form == "conductor":
             f_avg = fresnel.conductor_average(*inp.fresnel)
         else:
-            f_avg = fresnel.f82_average(self.switch("f0"), inp.fresnel[0])
+            f_avg = fresnel.f82_average(inp.f0, inp.fresnel[0])
         return fresnel.schlick_equivalent(f_avg)
 
     def transmittance(self, cos_theta):
@@ -693,20 +740,22 @@ class CookTorrance(BRDF):
         return self.state.plastic(dr.fmin(dr.fmax(cos_theta, 0.0), 1.0), data=self.m_plastic_t)
 
     def fresnel(self, inp, c):
-        """F at c = ω_r·h by the chosen form: a Float (``schlick``, ``dielectric``)
-        or a colour (``conductor``, ``f82``), see :meth:`coloured`."""
+        """F at c = ω_r·h by the chosen form: a Float (``schlick`` with one number
+        ``f0``, ``dielectric``) or a colour (``schlick`` with a colour or textured
+        ``f0``, ``conductor``, ``f82``), see :meth:`coloured`."""
         form = self.options.fresnel
         if form == "schlick":
-            return fresnel.schlick(self.switch("f0"), c)
+            return fresnel.schlick(inp.f0, c)
         if form == "dielectric":
             return fresnel.dielectric(inp.fresnel[0], c)
         if form == "conductor":
             return fresnel.conductor(inp.fresnel[0], inp.fresnel[1], c)
-        return fresnel.f82(self.switch("f0"), inp.fresnel[0], c)
+        return fresnel.f82(inp.f0, inp.fresnel[0], c)
 
     def coloured(self) -> bool:
         """True if F is a colour: it multiplies m_S then, the lobe's shape stays a Float."""
-        return self.options.fresnel in ("conductor", "f82")
+        return self.options.fresnel in ("conductor", "f82") or \
+            (self.options.fresnel == "schlick" and self.state.f0 == "colour")
 
     def specular_lobe(self, inp, si, wo, h, D):
         """m_S D F G / (4 cos θ_i) as a colour times a shape, with its ratio to the pdf."""
@@ -784,13 +833,14 @@ class CookTorrance(BRDF):
 
     @classmethod
     def effective(cls, values: dict, cos_theta: float) -> Effective:
-        """k·m_D, and (1 - k)·m_S·F(θ) with Schlick's F."""
-        k, f0 = float(values["k"]), float(values["f0"])
+        """k·m_D, and (1 - k)·m_S·F(θ) with Schlick's F (per channel for a colour ``f0``)."""
+        k = float(values["k"])
         notes = ((f"k = {k:.2g}: diffuse_reflectance has no effect",) if k < 1e-3 else ()) \
             + ((f"k = {k:.4g}: the specular lobe has no effect",) if k > 1.0 - 1e-3 else ())
+        F = rgb_list(schlick(rgb_list(values["f0"]), cos_theta))
         return Effective(rgb_list(values["diffuse_reflectance"], k),
-                         rgb_list(values["specular_reflectance"],
-                                  (1.0 - k) * schlick(f0, cos_theta)), notes)
+                         [m * ((1.0 - k) * f)
+                          for m, f in zip(rgb_list(values["specular_reflectance"]), F)], notes)
 
     # --- energy compensation: what single scattering misses of the random walk ---
     def compensation(self) -> compensation.Compensation:
@@ -989,6 +1039,21 @@ class CookTorrance(BRDF):
                                {"fresnel": "f82", "f0": 0.0, "f82_tint": 0.0},
                                {"fresnel": "f82", "f0": 1.0, "f82_tint": 0.0})
                      for a in (1e-4, 1.0) for k in (0.0, 0.5) for g in mf.GEOMETRIES]
+        # A colour F0 with Schlick's F (issue 35): F a colour, which weighs the lobe's
+        # selection too; with a diffuse lobe beside and alone, compensated per channel.
+        gold = {**c, "f0": rgb([0.95, 0.64, 0.2]), "distribution": "ggx", "geometry": "smith",
+                "alpha": 0.3}
+        chi2 += [Chi2({**gold, "k": 0.3}, (0, 60, 85)),
+                 Chi2({**gold, "distribution": "beckmann", "k": 0.0, "energy_compensation": True},
+                      (45,))]
+        consistency += [{**gold, "k": 0.4}, {**gold, "k": 0.0, "mode": "scanline"},
+                        {**gold, "k": 0.2, "energy_compensation": True}]
+        furnace += [Furnace(f"f0 a colour, ggx, smith, α = 0.3, k = 0{', compensated' * ec}",
+                            {**gold, "k": 0.0, "specular_reflectance": 1.0,
+                             "energy_compensation": ec}) for ec in (False, True)]
+        extremes += [{**gold, "f0": rgb([0.0, 1.0, 0.5]), "alpha": a, "k": k, **more}
+                     for a in (1e-4, 1.0) for k in (0.0, 0.5)
+                     for more in ({}, {"energy_compensation": True})]
         # roughplastic's base (its table of the interface's transmittance is not
         # differentiated: no gradient cases, as roughplastic's)
         plastic = {**c, "base": "plastic", "fresnel": "dielectric", "geometry": "smith"}
@@ -1038,6 +1103,7 @@ class CookTorrance(BRDF):
         consistency += compensated[::3]
         extremes += [{**cfg, "alpha": a} for cfg in compensated[:2] + compensated[4:6]
                      for a in (1e-4, 1e3)]
+        interior += [{**gold, "k": 0.4, "diffuse_reflectance": 0.5, "specular_reflectance": 0.7}]
         interior += [{**cfg, "energy_compensation": True} for cfg in interior]
         return Cases(
             chi2=chi2, consistency=consistency, furnace=furnace, extremes=extremes,
@@ -1066,6 +1132,7 @@ class CookTorrance(BRDF):
                for d in ("beckmann", "ggx")]
             + [{**c, **f, "distribution": "ggx", "geometry": "smith", "alpha": 0.3, "k": 0.2}
                for f in forms]
+            + [{**gold, "k": 0.2}, {**gold, "k": 0.0, "energy_compensation": True}]
             + [{**plastic, "distribution": "ggx", "alpha": 0.3, "mode": "hdr",
                 "diffuse_reflectance": rgb([0.8, 0.2, 0.1])}]
             + compensated[1::2],

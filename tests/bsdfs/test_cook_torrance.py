@@ -7,11 +7,15 @@ import math
 import numpy as np
 import pytest
 
+import drjit as dr
 import mitsuba as mi
 
 from mi_brdfs._jit import from_numpy
+from mi_brdfs.bsdfs.params import ParameterError
 import lecture
-from support import albedo, assert_refused, eval_and_pdf, random_hemisphere, rgb
+from support import (active_variant, albedo, assert_refused, assert_weight_is_value_over_pdf,
+                     error_line, eval_and_pdf, finite_difference, mirror_pairs, random_hemisphere,
+                     rgb, sampled, surface, vec)
 
 DISTRIBUTIONS = ["blinn", "beckmann", "ggx"]
 GEOMETRIES = ["cook_torrance", "smith"]
@@ -536,3 +540,169 @@ def test_anisotropic_renders_as_roughconductor_in_turned_frames(distribution):
                                    atol=1e-5 * ref.max())
     turned = np.abs(images["ours", 35.0] - images["ours", 0.0]).max()
     assert turned > 0.1 * images["ours", 0.0].max()
+
+
+# ----------------------------------------------------------------------------
+#  A colour F0 (issue 35): per channel, per point, per wavelength
+# ----------------------------------------------------------------------------
+
+F0_RGB = np.array([0.95, 0.64, 0.2])        # a gold-ish F0, far from grey
+
+
+def schlick_lobe(d, w, m_s, f0, rho, distribution, geometry):
+    """(n, 3): the lecture's m_S·D·F·G/(4 cos θ_i) with Schlick's F of a colour F0,
+    one channel at a time through tests/bsdfs/lecture.py (hdr eval, k = 0)."""
+    return np.stack([m_s[c] * lecture.cook_torrance_terms(d, w, rho, f0[c], distribution, geometry)
+                     for c in range(3)], axis=1)
+
+
+@pytest.mark.parametrize("distribution, geometry", [("ggx", "smith"), ("beckmann", "cook_torrance"),
+                                                    ("blinn", "smith")])
+@pytest.mark.parametrize("extra", [{"mode": "hdr"}, {"mode": "scanline"},
+                                   {"mode": "hdr", "energy_compensation": True}],
+                         ids=["hdr", "scanline", "compensated"])
+@pytest.mark.parametrize("k", [0.0, 0.4])
+def test_colour_f0_is_three_grey_plugins(rng, distribution, geometry, extra, k):
+    """An rgb f0 evaluates, channel by channel, as three plugins of one number
+    each (compensated too: the walk tables read at each channel's F0); with
+    one lobe (k = 0, not compensated: nothing picked by F) the pdf is theirs;
+    the sample weights equal eval / pdf."""
+    d, w = pairs(rng, 4096, alpha=0.3)
+    m_s = np.array([0.9, 0.8, 0.7])
+    common = {"type": "cook_torrance", "distribution": distribution, "geometry": geometry,
+              "alpha": 0.3, "k": k, "diffuse_reflectance": rgb([0.2, 0.5, 0.3]),
+              "specular_reflectance": rgb(m_s), **extra}
+    colour = mi.load_dict({**common, "f0": rgb(F0_RGB)})
+    v, p = eval_and_pdf(colour, w, d)
+    for c, f0 in enumerate(F0_RGB):
+        v_c, p_c = eval_and_pdf(mi.load_dict({**common, "f0": float(f0)}), w, d)
+        np.testing.assert_allclose(v[:, c], v_c[:, c], rtol=2e-6, atol=1e-8, err_msg=f"channel {c}")
+        if k == 0.0 and "energy_compensation" not in extra:
+            np.testing.assert_allclose(p, p_c, rtol=1e-6, atol=1e-8)
+    if k == 0.0 and extra == {"mode": "hdr"}:        # independently: the lecture's formula
+        rtol = 3e-3 if (distribution, geometry) == ("blinn", "smith") else 2e-4
+        np.testing.assert_allclose(v, schlick_lobe(d, w, m_s, F0_RGB, 0.3, distribution, geometry),
+                                   rtol=rtol, atol=1e-6)
+    assert_weight_is_value_over_pdf(sampled(colour, w[:1024], rng), f"f0 {F0_RGB}")
+
+
+def test_colour_f0_picks_the_lobe_by_its_mean(rng):
+    """The specular lobe is picked in proportion to (1 - k)·mean(m_S·F): Schlick's
+    F is affine in F0, so with a grey m_S the pdf of an rgb f0 is that of the
+    one number mean(f0) (and not that of any one channel)."""
+    d, w = pairs(rng, 4096, alpha=0.3)
+    common = {"type": "cook_torrance", "distribution": "ggx", "geometry": "smith",
+              "alpha": 0.3, "k": 0.4, "specular_reflectance": 0.8}
+    _, p = eval_and_pdf(mi.load_dict({**common, "f0": rgb(F0_RGB)}), w, d)
+    _, p_mean = eval_and_pdf(mi.load_dict({**common, "f0": float(F0_RGB.mean())}), w, d)
+    _, p_red = eval_and_pdf(mi.load_dict({**common, "f0": float(F0_RGB[0])}), w, d)
+    np.testing.assert_allclose(p, p_mean, rtol=1e-5, atol=1e-8)
+    assert np.abs(p - p_red).max() > 1e-2 * p.max()
+
+
+@pytest.mark.parametrize("compensated", [False, True])
+def test_textured_f0_is_read_per_point(rng, compensated):
+    """f0 as a checkerboard texture: at a uv of each tile the plugin evaluates as
+    the plugin of that tile's number (eval and pdf; compensated, the tables'
+    F0 axis read per lane, not contracted as a constant)."""
+    lo, hi = 0.1, 0.85
+    common = {"type": "cook_torrance", "distribution": "ggx", "geometry": "smith",
+              "alpha": 0.4, "k": 0.0, "energy_compensation": compensated}
+    textured = mi.load_dict({**common, "f0": {"type": "checkerboard", "color0": lo, "color1": hi}})
+    assert textured.state.f0 == "colour"
+    n = 2048
+    d, w = pairs(rng, n, alpha=0.4)
+    n = len(w)
+    tiles = (np.arange(n) % 2).astype(bool)           # alternate lanes: one tile, the other
+    uv = np.where(tiles[:, None], [0.75, 0.25], [0.25, 0.25])
+    seen = np.array(textured.eval_attribute("f0", surface(w, uv)), dtype=np.float64)
+    np.testing.assert_allclose(seen[0], np.where(tiles, hi, lo), rtol=1e-6)   # the tiles
+    v, p = eval_and_pdf(textured, w, d, uv)
+    for tile, f0 in ((False, lo), (True, hi)):
+        v_f, p_f = eval_and_pdf(mi.load_dict({**common, "f0": f0}), w, d, uv)
+        lanes = tiles == tile
+        np.testing.assert_allclose(v[lanes], v_f[lanes], rtol=2e-6, atol=1e-8)
+        np.testing.assert_allclose(p[lanes], p_f[lanes], rtol=1e-6, atol=1e-8)
+        other = ~lanes                                # (there, the other tile's number)
+        assert np.abs(v[other] - v_f[other]).max() > 0.1 * v[other].max()
+
+
+@pytest.mark.parametrize("variant", ["llvm_ad_spectral", "scalar_spectral"])
+@pytest.mark.parametrize("compensated", [False, True])
+def test_spectrum_f0_is_read_per_wavelength(rng, variant, compensated):
+    """In spectral variants an f0 spectrum is read at each wavelength: its value
+    at wavelength j is that of the plugin of the spectrum's number there."""
+    nodes = {420.0: 0.3, 520.0: 0.6, 610.0: 0.9, 690.0: 0.95}      # evaluated at its nodes
+    with active_variant(variant):
+        common = {"type": "cook_torrance", "distribution": "ggx", "geometry": "smith",
+                  "alpha": 0.5, "k": 0.0, "energy_compensation": compensated}
+        bsdf = mi.load_dict({**common, "f0": {"type": "spectrum",
+                                              "value": list(nodes.items())}})
+        greys = [mi.load_dict({**common, "f0": f0}) for f0 in nodes.values()]
+        wi, wo = random_hemisphere(rng, 6, 0.1), random_hemisphere(rng, 6, 0.1)
+        ctx = mi.BSDFContext()
+        for k in range(len(wi)):
+            si = dr.zeros(mi.SurfaceInteraction3f)
+            si.wavelengths = mi.Spectrum(*nodes)
+            si.wi = mi.Vector3f(*map(float, wi[k]))
+            v = mi.Vector3f(*map(float, wo[k]))
+            ours = np.array(bsdf.eval(ctx, si, v), dtype=np.float64).ravel()
+            assert len(ours) == len(nodes)
+            for j, grey in enumerate(greys):
+                value = np.array(grey.eval(ctx, si, v), dtype=np.float64).ravel()[j]
+                assert ours[j] == pytest.approx(value, rel=1e-5, abs=1e-8)
+            assert np.ptp(ours) > 0.05 * ours.max()
+
+
+@pytest.mark.parametrize("compensated", [False, True])
+def test_colour_f0_gradient_matches_finite_differences(rng, compensated):
+    """AD of Σ eval with respect to each channel of an rgb f0 (through traverse,
+    the key ``f0.value``) = central finite differences of fresh loads."""
+    wi, wo = mirror_pairs(rng, 1024, 0.35, min_cos=0.1)
+    common = {"type": "cook_torrance", "distribution": "ggx", "geometry": "smith",
+              "alpha": 0.4, "k": 0.3, "energy_compensation": compensated}
+    bsdf = mi.load_dict({**common, "f0": rgb(F0_RGB)})
+    params = mi.traverse(bsdf)
+    dr.enable_grad(params["f0.value"])
+    params.update()
+    dr.backward(dr.sum(dr.sum(bsdf.eval(mi.BSDFContext(), surface(wi), vec(wo)))))
+    grad = np.array(dr.grad(params["f0.value"]), dtype=np.float64).ravel()
+    h = 1e-3
+    for c in range(3):
+        def total(x, c=c):
+            f0 = F0_RGB.copy()
+            f0[c] = x
+            return float(eval_and_pdf(mi.load_dict({**common, "f0": rgb(f0)}), wi, wo)[0].sum())
+        fd = finite_difference(total, float(F0_RGB[c]), h)
+        assert abs(fd) > 1e-3
+        np.testing.assert_allclose(grad[c], fd, rtol=2e-2, err_msg=f"channel {c}")
+
+
+@pytest.mark.parametrize("f0, shown", [([0.5, 1.2, 0.3], "1.2"), ([0.5, 0.3, -0.1], "-0.1")])
+def test_colour_f0_out_of_range_is_one_line(f0, shown):
+    """A channel outside [0, 1], at load time and at params.update()."""
+    config = {"type": "cook_torrance", "f0": rgb([0.5, 0.5, 0.5])}
+    assert_refused({**config, "f0": rgb(f0)}, "f0", shown, "[0, 1]")
+    params = mi.traverse(mi.load_dict(config))
+    params["f0.value"] = mi.Color3f(*f0)
+    with pytest.raises(ParameterError) as info:
+        params.update()
+    last = error_line(info.value)
+    value = repr(float(np.float32(float(shown))))
+    assert f"cook_torrance: parameter 'f0' = {value} is invalid" in last and "[0, 1]" in last, last
+
+
+def test_a_number_f0_keeps_f_a_float():
+    """One number (a course scene's f0) keeps Schlick's F a Float, its traverse
+    key ``f0.value``; the constant 1 is folded (F = 1, nothing traced), and
+    unfolds when it is changed."""
+    grey = mi.load_dict({"type": "cook_torrance", "f0": 0.3})
+    assert grey.state.f0 == "grey" and not grey.coloured()
+    assert mi.load_dict({"type": "cook_torrance", "f0": rgb([0.3, 0.3, 0.4])}).coloured()
+    one = mi.load_dict({"type": "cook_torrance", "f0": 1.0})
+    assert one.state.f0 == "one"
+    key = one.trace_key()
+    params = mi.traverse(one)
+    params["f0.value"] = 0.5
+    params.update()
+    assert one.state.f0 == "grey" and one.trace_key() != key

@@ -244,7 +244,7 @@ def test_compensated_conductor_matches_the_walk(distribution, alpha):
     bsdf = mi.load_dict(cook_torrance(distribution, alpha=alpha, specular_reflectance=rgb(m_s)))
     params = mi.traverse(bsdf)
     for f0 in (0.0, 0.3, 0.6, 0.9, 1.0):
-        params["f0"] = f0
+        params["f0.value"] = f0
         params.update()
         e = np.array([albedo(bsdf, t, 0.0, 512) for t in THETAS_FEW])
         w = walk_albedo(distribution, alpha, f0)[[THETAS_85.index(t) for t in THETAS_FEW], None] \
@@ -302,7 +302,7 @@ def test_compensated_anisotropic_conductor_matches_the_walk(distribution, alpha_
     for n, j in enumerate(f0s):
         for b in (bsdf, single):
             params = mi.traverse(b)
-            params["f0"] = ref["f0"][j]
+            params["f0.value"] = ref["f0"][j]
             params.update()
         for k, phi in enumerate(ref["phi"]):
             for i, theta in enumerate(ref["theta"]):
@@ -333,7 +333,7 @@ def test_other_microsurfaces_against_the_nearest_walk(distribution, geometry):
     params = mi.traverse(bsdf)
     for alpha in (0.3, 1.0):
         for f0 in (0.0, 0.6, 1.0):
-            params["alpha.value"], params["f0"] = alpha, f0
+            params["alpha.value"], params["f0.value"] = alpha, f0
             params.update()
             e = np.array([albedo(bsdf, t, 0.0, 256)[0] for t in THETAS_85])
             w = walk_albedo(walk, alpha, f0)

@@ -14,9 +14,9 @@ defaults. Names:
 Beckmann, one option away from the lecture's forms (issue 35), the steps
 from the lecture's approximation to the physics it stands for:
 
-- ``cook_torrance/<D>/smith/f82``: Hoffman's F82-tint (``f0``, ``f82_tint``
-  free; ``f0`` is one number while the plugin takes it as one, so
-  ``specular_reflectance`` stays free as the colour);
+- ``cook_torrance/<D>/smith/f82``: Hoffman's F82-tint (``f0`` and
+  ``f82_tint`` free, both colours, as Hoffman's metal has them;
+  ``specular_reflectance`` held at 1: the Fresnel carries the colour);
 - ``cook_torrance/<D>/smith/conductor``: the exact conductor Fresnel, ``eta``
   in [0, 8] and ``kappa`` in [0, 10] per channel (every material of
   Mitsuba's ``data/ior`` lies inside: η ≤ 7.6, κ ≤ 9.3 in RGB), free and not
@@ -43,7 +43,10 @@ plastic rung to plastics), and ``--models`` names them.
 **Parameters.** A model's free parameters are those its plugin exposes in
 ``mi.traverse`` when loaded with its defaults (so optional alternatives stay
 out: Ward's anisotropic ``alpha_u``/``alpha_v``, toon's ramps), each with its
-declaration in the plugin's ``PARAMS`` (range, kind, role). Each is searched
+declaration in the plugin's ``PARAMS`` (range, kind, role); a colour
+parameter is fitted per channel, except those :data:`ONE_NUMBER` names (the
+lecture's ``f0``: a number, unless a model fits it as a colour, the F82
+rung). Each is searched
 over [lo, hi] of its declaration, with ``hi`` = the declared upper end, or
 ``upper``, or 1 for an unbounded colour (white); exponents stop at
 ``EXPONENT_MAX``. The optimiser moves an unconstrained coordinate u per
@@ -70,7 +73,7 @@ import numpy as np
 
 import drjit as dr
 
-from ...bsdfs import BY_NAME, PLUGINS
+from ...bsdfs import PLUGINS
 EXPONENT_MAX = 1e6        # exponents are searched up to here (a mirror-like lobe)
 U_MAX = 30.0              # coordinates stay within ±U_MAX (σ(-30) = 1e-13; σ(u) rounds to 1 in float32 from u = 17)
 U_START = 6.0             # a start "at a bound" is u = ±6 (0.25 % of the range inside it)
@@ -88,6 +91,7 @@ class Model:
     held: tuple = ()        # (name, value) not fitted: given as value, or not given (None)
     bounds: tuple = ()      # (name, lo, hi): a search range other than the declaration's
     curved: tuple = ()      # colour parameters eval is not linear in (scanned, not solved)
+    colours: tuple = ()     # parameters of ONE_NUMBER fitted per channel all the same
     metals: bool = False    # the scan also starts from Mitsuba's measured metals (:func:`metal_starts`)
 
     def properties(self) -> dict:
@@ -133,10 +137,9 @@ def rung(distribution: str, form: str, nonlinear: bool = False) -> Model:
                      curved=("eta", "kappa"), metals=True)
     if form != "f82":
         raise ValueError(f"rung {form!r} is unknown; valid: f82, conductor, plastic")
-    f0_colour = next(p for p in BY_NAME["cook_torrance"].PARAMS if p.name == "f0").kind != "float"
     return Model(base, "cook_torrance", opts + (("fresnel", "f82"),),
-                 held=((("specular_reflectance", 1.0),) if f0_colour else ()) + METAL,
-                 curved=("f82_tint", "f0") if f0_colour else ("f82_tint",))
+                 held=(("specular_reflectance", 1.0),) + METAL,
+                 curved=("f82_tint", "f0"), colours=("f0",))
 
 
 def metal_starts(alpha: float) -> list[dict]:
@@ -265,11 +268,20 @@ def logistic(u):
     return dr.rcp(1.0 + dr.exp(-u))
 
 
+# Colour parameters fitted as one number (a plugin loaded with its defaults
+# holds them as a ``uniform``, whose traverse key takes one): cook_torrance's
+# ``f0``, a number in the lecture; as a colour beside the colour m_S it would
+# trade against it channel by channel (m_S·F0 nearly one product per channel).
+ONE_NUMBER = {"cook_torrance": ("f0",)}
+
+
 def free_parameters(plugin_cls, traversed: list[str], model: Model | None = None) -> list[Free]:
     """The Free parameters of a plugin instance whose traverse keys are
     ``traversed``; a ``model``'s held parameters left out, its bounds and
-    curved colours applied."""
+    curved colours applied; :data:`ONE_NUMBER` fitted as one number unless
+    the model names them in ``colours``."""
     declared = {p.name: p for p in plugin_cls.PARAMS}
+    one = set(ONE_NUMBER.get(plugin_cls.name, ())) - set(model.colours if model else ())
     held = {k for k, _ in model.held} if model else set()
     bounds = {b[0]: b[1:] for b in model.bounds} if model else {}
     curved = set(model.curved) if model else set()
@@ -286,7 +298,7 @@ def free_parameters(plugin_cls, traversed: list[str], model: Model | None = None
             hi = min(hi, EXPONENT_MAX)
         lo, hi = bounds.get(name, (lo, hi))
         log_start = log_start and lo == 0.0
-        out.append(Free(name, key, p.kind == "spectrum", lo, hi, log_start,
+        out.append(Free(name, key, p.kind == "spectrum" and name not in one, lo, hi, log_start,
                         linear=name not in curved))
     return out
 

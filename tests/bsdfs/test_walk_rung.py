@@ -128,9 +128,11 @@ def test_albedo_with_a_diffuse_lobe_beside():
 
 def cell_counts(wo, res):
     """Histogram of directions over res x 2res cells of (cos θ, φ)."""
+    wo = np.asarray(wo, dtype=np.float64)     # (in float32, 1 - 1e-9 rounds to 1: a row too many)
     mu = np.clip(wo[:, 2], 0, 1 - 1e-9)
     phi = np.mod(np.arctan2(wo[:, 1], wo[:, 0]), 2 * np.pi)
-    i = (mu * res).astype(int) * 2 * res + (phi / (2 * np.pi) * 2 * res).astype(int)
+    column = np.minimum((phi / (2 * np.pi) * 2 * res).astype(int), 2 * res - 1)   # φ = 2π
+    i = (mu * res).astype(int) * 2 * res + column
     return np.bincount(i[wo[:, 2] > 0], minlength=2 * res * res)
 
 

@@ -150,7 +150,7 @@ VARIED = {
     "phong": {"mode": "scanline", "exponent": 37.5},
     "blinn": {"energy_compensation": True, "specular_reflectance": [0.9, 0.8, 0.2]},
     "ward": {"alpha": 0.21, "formula": "angles"},
-    "cook_torrance": {"distribution": "ggx", "geometry": "smith", "k": 0.25, "f0": 0.7,
+    "cook_torrance": {"distribution": "ggx", "geometry": "smith", "k": 0.25, "f0": [0.7, 0.6, 0.5],
                       "alpha": 0.15, "energy_compensation": True, "sample_visible": False},
     "diffuse": {"reflectance": [0.2, 0.4, 0.6]},
     "roughconductor": {"material": "Cu", "alpha": 0.2, "distribution": "ggx",

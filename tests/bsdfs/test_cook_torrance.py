@@ -706,3 +706,18 @@ def test_a_number_f0_keeps_f_a_float():
     params["f0.value"] = 0.5
     params.update()
     assert one.state.f0 == "grey" and one.trace_key() != key
+
+
+def test_effective_colour_of_a_colour_f0():
+    """What the fit reports: the highlight's colour (1 - k)·m_S·F(θ) per channel,
+    Schlick's F of each channel's F0 (NumPy: lecture.F_schlick); a number f0
+    gives the same as before, a grey colour."""
+    from mi_brdfs.bsdfs.cook_torrance import CookTorrance
+    m_s, k, c = np.array([0.9, 0.8, 0.7]), 0.25, math.cos(math.radians(70.0))
+    values = {"k": k, "diffuse_reflectance": 0.5, "specular_reflectance": list(m_s)}
+    got = CookTorrance.effective({**values, "f0": list(F0_RGB)}, c)
+    expected = (1 - k) * m_s * lecture.F_schlick(F0_RGB, c)
+    np.testing.assert_allclose(got.specular, expected, rtol=1e-12)
+    grey = CookTorrance.effective({**values, "f0": 0.3}, c)
+    np.testing.assert_allclose(grey.specular, (1 - k) * m_s * lecture.F_schlick(0.3, c),
+                               rtol=1e-12)

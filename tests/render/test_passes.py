@@ -107,7 +107,7 @@ def test_a_folded_number_changed_records_again():
     frozen.warm_up(scene)
     params = mi.traverse(scene)
     first = np.array(render(scene, 2, 0))
-    params["sphere.bsdf.f0"] = 0.25
+    params["sphere.bsdf.f0.value"] = 0.25
     params.update()
     second = np.array(render(scene, 2, 0))
     np.testing.assert_allclose(second, np.array(mi.render(scene, spp=2, seed=0)),

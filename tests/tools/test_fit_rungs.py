@@ -58,6 +58,25 @@ def test_the_rungs_are_named_and_added_only_to_their_targets():
         "cook_torrance/ggx/smith/plastic/nonlinear"]
 
 
+def test_f0_is_one_number_but_on_the_f82_rung():
+    """cook_torrance's f0 takes a colour; the fit keeps the lecture's one number
+    beside the colour specular_reflectance (models.ONE_NUMBER), and the F82 rung
+    fits it per channel with specular_reflectance held at 1 (Hoffman's metal)."""
+    cls = BY_NAME["cook_torrance"]
+
+    def free(model) -> dict:
+        keys = list(mi.traverse(mi.load_dict(model.properties())).keys())
+        return {f.name: f for f in models.free_parameters(cls, keys, model)}
+
+    schlick = free(next(m for m in models.all_models() if m.name == "cook_torrance/ggx/smith"))
+    assert schlick["f0"].key == "f0.value" and not schlick["f0"].colour
+    assert schlick["specular_reflectance"].colour
+    f82 = free(models.rung("ggx", "f82"))
+    assert f82["f0"].colour and not f82["f0"].linear and f82["f82_tint"].colour
+    assert "specular_reflectance" not in f82
+    assert dict(models.rung("ggx", "f82").held)["specular_reflectance"] == 1.0
+
+
 def target_f0(spec: str) -> np.ndarray:
     """A roughconductor's F0 per channel from its own RGB indices, by the
     formula ((η - 1)² + κ²)/((η + 1)² + κ²), written here."""

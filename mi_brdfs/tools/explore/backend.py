@@ -164,17 +164,16 @@ def walk_albedo(material: dict, angles, paths: int, seed: int = 1) -> np.ndarray
     """The white furnace of ``material`` (a complete ``cook_torrance``, see
     :func:`walk_applies`) by the random walk: k + (1 - k) W(θ; α, F0), W the
     walk's albedo of the Smith microsurface with Schlick's F at every bounce
-    and white m_D = m_S = 1; for a colour ``f0`` the mean of its channels' W
-    (one walk per distinct value). NumPy only (no Dr.Jit): any thread may run it."""
+    and white m_D = m_S = 1; for a colour ``f0`` its largest channel's, as the
+    explorer's albedo curves show the largest channel (W grows with F0 on every
+    path: each bounce's Schlick F does). NumPy only (no Dr.Jit): any thread may run it."""
     from ..groundtruth import albedo    # here: the walk needs SciPy, not in the explore extra
     mu = np.cos(np.radians(np.asarray(angles, dtype=np.float64)))
     alpha = max(float(material["alpha"]), ALPHA_MIN)
     f0 = material["f0"]
-    channels = [float(v) for v in (f0 if isinstance(f0, (list, tuple)) else [f0])]
-    f0s = sorted(set(channels))
-    walked = albedo(material["distribution"], np.maximum(mu, 1e-3), alpha, tuple(f0s),
-                    paths=paths, seed=seed)
-    w = np.mean([walked[:, f0s.index(v)] for v in channels], axis=0)
+    f0 = max(float(v) for v in (f0 if isinstance(f0, (list, tuple)) else [f0]))
+    w = albedo(material["distribution"], np.maximum(mu, 1e-3), alpha, (f0,),
+               paths=paths, seed=seed)[:, 0]
     k = float(material["k"])
     return k + (1.0 - k) * w
 

@@ -13,6 +13,11 @@ Report folders (``compare -o DIR``, ``validate -o DIR``) are one of:
 - a previous report of ours: a folder holding the marker file ``.mi-brdfs-report``,
   which lists every file that report wrote (paths relative to the folder: a
   report may have subfolders, e.g. the bench's fit sweep), and nothing else.
+  A subfolder the report wrote that is a report of ours itself, with its own
+  marker, counts with every file that marker lists: the bench's ``trade/``
+  is re-run by its own command (``python -m mi_brdfs.tools.fit.trade -o
+  docs/benchmarks/trade``), which writes files the bench's marker never
+  listed, and the bench must still take its folder.
 
 Anything else (an existing file, a folder holding other files, a folder that
 holds one of the command's inputs, a symbolic link) is refused with one line,
@@ -90,7 +95,11 @@ def previous_report(path: str) -> list[str] | None:
         return None
     if not isinstance(files, list) or not all(_safe(n) for n in files):
         return None
-    return files
+    for sub in dict.fromkeys(n.split("/")[0] for n in files if "/" in n):
+        inner = previous_report(os.path.join(path, sub))     # a report of its own in it
+        if inner is not None:
+            files = files + [f"{sub}/{n}" for n in inner + [MARKER]]
+    return list(dict.fromkeys(files))
 
 
 def _inside(path: str, folder: str) -> bool:

@@ -193,6 +193,40 @@ def test_a_report_with_subfolders_is_replaced_and_nothing_else_goes(tmp_path):
     assert destinations.previous_report(str(bad)) is None
 
 
+def test_a_report_inside_a_report_counts_with_its_own_files(tmp_path):
+    """The bench's trade/ re-run by its own command: the files its new marker
+    lists are a report's, not the user's, so the outer folder still takes a
+    run, which removes them with the rest; a user's file there still makes
+    the folder foreign, and a marker the outer report did not write in a
+    subfolder of its own is not followed."""
+    outer = tmp_path / "bench"
+    with destinations.report_dir(str(outer), "bench") as tmp:
+        with destinations.report_dir(os.path.join(tmp, "trade"), "fit") as inner:
+            Path(inner, "old.json").write_text("1")
+        Path(tmp, "README.md").write_text("r")
+    with destinations.report_dir(str(outer / "trade"), "fit") as inner:      # the sweep again
+        Path(inner, "new.json").write_text("2")
+    assert not (outer / "trade" / "old.json").exists()
+    destinations.check_report_dir(str(outer))                                # no foreign file
+    (outer / "trade" / "mine.txt").write_text("the user's")
+    with pytest.raises(destinations.OutputError, match="trade/mine.txt"):
+        destinations.check_report_dir(str(outer))
+    (outer / "trade" / "mine.txt").unlink()
+    (outer / "other").mkdir()                                                 # not the outer's
+    (outer / "other" / destinations.MARKER).write_text(
+        json.dumps({"command": "x", "files": ["x.txt"]}))
+    (outer / "other" / "x.txt").write_text("x")
+    with pytest.raises(destinations.OutputError, match="other/"):
+        destinations.check_report_dir(str(outer))
+    (outer / "other" / "x.txt").unlink()
+    (outer / "other" / destinations.MARKER).unlink()
+    (outer / "other").rmdir()
+    with destinations.report_dir(str(outer), "bench") as tmp:               # the bench again
+        Path(tmp, "README.md").write_text("r2")
+    assert sorted(os.listdir(outer)) == sorted(["README.md", destinations.MARKER])
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".tmp")]
+
+
 @pytest.mark.parametrize("spelling", ["elink", "elink/", "elink//", "./elink/"])
 def test_a_link_is_refused_however_it_is_spelled(renders, tmp_path, spelling):
     """A symbolic link to an empty folder, with or without trailing slashes,

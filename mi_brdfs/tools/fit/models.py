@@ -91,7 +91,7 @@ class Model:
     held: tuple = ()        # (name, value) not fitted: given as value, or not given (None)
     bounds: tuple = ()      # (name, lo, hi): a search range other than the declaration's
     curved: tuple = ()      # colour parameters eval is not linear in (scanned, not solved)
-    colours: tuple = ()     # parameters of ONE_NUMBER fitted per channel all the same
+    colours: tuple = ()     # parameters of ONE_NUMBER this model fits per channel
     metals: bool = False    # the scan also starts from Mitsuba's measured metals (:func:`metal_starts`)
 
     def properties(self) -> dict:

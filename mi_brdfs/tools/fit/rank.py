@@ -25,7 +25,7 @@ Two models cost the same when their classes are equal and one is cheaper
 when its class is lower: an equivalence and a total order, so "cheaper" and "equal" are transitive
 (overlapping intervals were not: a ≈ b and b ≈ c with a < c). 5 % is about
 what a time per sample moves between two runs; the intervals are wider (the
-timing closes at high/low :data:`CLOSED`, the variance's 1.03–1.29), and the
+timing closes at high/low 1.10, the variance's 1.03–1.29), and the
 report prints each beside its class: a class apart is an order, not a claim
 beyond the noise. Two costs either side of a class's edge
 fall into neighbouring classes however close they are, the price of a
@@ -73,7 +73,6 @@ TIE_FLIP = 0.005           # FLIP differences below this count as equal in the r
 SMALL_FLIP = 0.05          # a best FLIP above this: no model is close; say why
 COST_BAND = 0.05           # the width of a cost class: a factor 1.05
 LOOKS_SAME = 0.02          # the tolerance without renders (the sweep's seed noise: 0.014-0.030)
-CLOSED = 1.10              # an interval with high/low above this did not close (the timing's aim)
 EARLIER_AIM = 1.05         # the aim of records that do not name theirs (timed before cost_aim)
 
 

@@ -16,7 +16,7 @@ least and at most ``cost_rounds``. 1.10 because the time to the same noise
 (:func:`.rank.time_to_noise`) multiplies this ratio by the variance ratio,
 whose 90 % intervals read high/low 1.03–1.29 (median about 1.1; gold α 0.1
 and the α 0.1 plastic, four models each): at load average 4, gold α 0.1's
-models took 14–20 rounds to reach 1.05 (five models) and 3–12, median 6, to
+models took 14–20 rounds to reach 1.05 (five models) and 3–12, median 6.5, to
 reach 1.10 (its 28), for a figure the product could not use. ``cost_ratio`` is that mean,
 ``cost_low`` and ``cost_high`` the interval, ``cost_timing`` what was timed.
 Only one measurement runs at a time, after every fit.

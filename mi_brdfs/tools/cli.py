@@ -147,7 +147,7 @@ def cmd_fit(args: argparse.Namespace) -> int:
     try:
         records = fit.fit(args.targets, args.output, args.models, quick=args.quick,
                           metric_name=args.metric, scheduler=args.scheduler,
-                          jobs=args.jobs or max(1, min(2, os.cpu_count() or 1)),
+                          jobs=args.jobs,
                           show=show, command=" ".join(["mi-brdfs", *sys.argv[1:]]))
     finally:
         show.close()

@@ -205,3 +205,18 @@ def test_the_guide_reads_the_committed_scene_reports(name):
         assert f"load {t['load_average']:.1f}" in row
     for file in ("index.html", "original.png", "simplified.png", result["simplified"]):
         assert (COMMITTED / name / file).exists(), file
+
+
+def test_the_command_without_jobs_fits_on_the_default_processes(tmp_path, capsys):
+    """`mi-brdfs fit --scene` with no -j: the fits run on the default number
+    of local processes (once, None reached the process pool and the command
+    ended in "'>' not supported between 'NoneType' and 'int'")."""
+    (tmp_path / "assets").mkdir()
+    shutil.copy(ASSETS / "sphere.obj", tmp_path / "assets" / "sphere.obj")
+    (tmp_path / "scene.xml").write_text(SCENE)
+    code = cli.main(["fit", "--scene", str(tmp_path / "scene.xml"), "--quick", "--quiet",
+                     "--models", "lambert", "-o", str(tmp_path / "r")])
+    err = capsys.readouterr().err
+    assert code == 0, err
+    saved = json.loads((tmp_path / "r" / "scenefit.json").read_text())
+    assert [r["plugin"] for r in saved["materials"]] == ["phong", "dielectric"]

@@ -42,7 +42,7 @@ def _stderr(message: str) -> None:
 
 
 def fit(specs: list[str], out_dir: str, model_names: list[str] | None = None,
-        quick: bool = False, metric_name: str = "cosine", jobs: int = 1,
+        quick: bool = False, metric_name: str = "cosine", jobs: int | None = None,
         scheduler: str | None = None, show=None, command: str = "mi-brdfs fit",
         settings: Settings | None = None, also=None, warn=_stderr,
         worker_timeout: float | None = None) -> list[dict]:
@@ -51,7 +51,8 @@ def fit(specs: list[str], out_dir: str, model_names: list[str] | None = None,
     report dependencies, the models, the targets (each loaded once; a
     repeated one is fitted once, with ``warn``) and the scheduler (reachable,
     with a worker within ``worker_timeout`` seconds). ``also(folder,
-    records)`` may add files to the report. Returns the records (see
+    records)`` may add files to the report. ``jobs``: local fits at once
+    (None: :func:`.sweep.default_jobs`). Returns the records (see
     :mod:`.report`)."""
     if metric_name not in metric.METRICS:
         raise ValueError(f"--metric {metric_name} is unknown; valid: {', '.join(metric.METRICS)}")
@@ -82,7 +83,8 @@ def fit(specs: list[str], out_dir: str, model_names: list[str] | None = None,
     start = time.perf_counter()
     works = {t.name: prepared(t, settings) for t in parsed}
     try:
-        records = sweep.run_fits(tasks, settings, jobs=jobs, scheduler=scheduler, show=show,
+        records = sweep.run_fits(tasks, settings, jobs=jobs,
+                                 scheduler=scheduler, show=show,
                                  client=client, worker_timeout=timeout, total=total, start=start,
                                  works=works)
     finally:

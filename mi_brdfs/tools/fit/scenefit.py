@@ -478,7 +478,7 @@ def _check_models(model_names):
 
 def fit_scene(scene_path: str, out_dir: str, defines: dict | None = None,
               model_names: list[str] | None = None, res: int = RES, spp: int = SPP,
-              jobs: int = 1, show=None, command: str = "mi-brdfs fit --scene",
+              jobs: int | None = None, show=None, command: str = "mi-brdfs fit --scene",
               candidates: int = CANDIDATES, rounds: int = TIMING_ROUNDS, log=None) -> dict:
     """Simplify every material of ``scene_path`` (module docstring) and write
     the report to ``out_dir``; returns the report's record. ``log(line)``

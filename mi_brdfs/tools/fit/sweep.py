@@ -52,11 +52,20 @@ class SweepError(RuntimeError):
 def _init_worker(threads: int | None) -> None:
     if threads:
         dr.set_thread_count(threads)
+        # FLIP's OpenMP threads too (read when flip_evaluator is imported, later)
+        os.environ.setdefault("OMP_NUM_THREADS", str(threads))
+
+
+def default_jobs() -> int:
+    """Local fits at once when none is asked for: the cores, at most 2 (more
+    processes on this 2-core machine only share the same cores)."""
+    return max(1, min(2, os.cpu_count() or 1))
 
 
 @contextlib.contextmanager
 def local_executor(jobs: int) -> Iterator[cf.Executor]:
-    """``jobs`` worker processes (spawned), Dr.Jit's threads shared among them."""
+    """``jobs`` worker processes (spawned), the cores shared among them (Dr.Jit's
+    threads and FLIP's)."""
     threads = max(1, (os.cpu_count() or 1) // jobs) if jobs > 1 else None
     pool = cf.ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("spawn"),
                                   initializer=_init_worker, initargs=(threads,))
@@ -196,14 +205,15 @@ def local_sweep(executor: cf.Executor, tasks: list, settings: Settings, collect,
         raise
 
 
-def run_fits(tasks: list[tuple[T.Target, M.Model]], settings: Settings, jobs: int = 1,
+def run_fits(tasks: list[tuple[T.Target, M.Model]], settings: Settings, jobs: int | None = None,
              scheduler: str | None = None, show=None, client=None,
              worker_timeout: float = WORKER_TIMEOUT, total: int | None = None,
              start: float | None = None, works: dict | None = None) -> list[dict]:
     """Every (target, model) task, on local processes or on the Dask scheduler
     at ``scheduler`` (``client``: one already connected); records in task
-    order. ``show(done, total, elapsed, record)`` after each task (``total``:
-    the steps of the whole run, if more than the fits; ``start``: its
+    order (``jobs``: local processes, None :func:`default_jobs`).
+    ``show(done, total, elapsed, record)`` after each task (``total``: the
+    steps of the whole run, if more than the fits; ``start``: its
     ``time.perf_counter()`` at the start of the run; ``works``: target name:
     its :class:`.work.TargetWork`, handed to each of its tasks)."""
     records: list[dict | None] = [None] * len(tasks)
@@ -225,7 +235,7 @@ def run_fits(tasks: list[tuple[T.Target, M.Model]], settings: Settings, jobs: in
             if own:
                 client.close()
     else:
-        with local_executor(jobs) as executor:
+        with local_executor(jobs or default_jobs()) as executor:
             local_sweep(executor, tasks, settings, collect, works)
     return [r for r in records if r is not None]
 

@@ -57,14 +57,14 @@ def fit_materials(out_dir: str, quick: bool = False, jobs: int | None = None,
                   targets=TARGETS, settings=None) -> list[dict]:
     """Fit every model (or ``models``) to every target; the report, with
     ``trade.md``, goes to ``out_dir`` (a report folder). ``jobs``: fits at
-    once (default: one per core, at most 2; the costs are timed one at a time)."""
+    once (default: one per core, at most 2, :func:`.sweep.default_jobs`; the
+    costs are timed one at a time)."""
     labels = dict((spec, label) for label, spec in targets)
 
     def write_table(folder: str, records: list[dict]) -> None:
         with open(os.path.join(folder, "trade.md"), "w") as f:
             f.write(subset_note(targets) + table(records, labels))
 
-    jobs = jobs or max(1, min(2, os.cpu_count() or 1))
     return fit([spec for _, spec in targets], out_dir, models, quick=quick, jobs=jobs,
                scheduler=scheduler, show=show, settings=settings,
                command="mi_brdfs.tools.fit.trade.fit_materials", also=write_table)

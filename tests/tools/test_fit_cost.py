@@ -10,7 +10,7 @@ import pytest
 
 from mi_brdfs.tools.fit import cost, rank, targets, task
 
-SETTINGS = task.QUICK.replace(res=32, spp=4, cost_rounds=(4, 8), cost_tolerance=0.05)
+SETTINGS = task.QUICK.replace(res=32, spp=4, cost_rounds=(4, 8), cost_tolerance=0.05, cost_spp=2)
 T90_4 = 2.131847      # Student's t, 95th percentile, 4 degrees of freedom (tables)
 
 
@@ -47,6 +47,7 @@ def test_two_measurements_overlap_and_the_counts_repeat():
         assert a["cost_low"] / loose <= b["cost_high"] * loose
         assert b["cost_low"] / loose <= a["cost_high"] * loose
         assert a["ops"] == b["ops"] and a["ops_ratio"] == b["ops_ratio"]
+        assert a["cost_spp"] == 2                     # timed at cost_spp, not the views' spp
     # Cook-Torrance's traced eval and sample hold more operations than Lambert's.
     assert first["cook_torrance"]["ops"] > first["lambert"]["ops"]
 

@@ -21,6 +21,17 @@ reach 1.10 (its 28), for a figure the product could not use. ``cost_ratio`` is t
 ``cost_low`` and ``cost_high`` the interval, ``cost_timing`` what was timed.
 Only one measurement runs at a time, after every fit.
 
+**At 32 spp** (``cost_spp``; the views render at 64, and reports made before
+``cost_spp`` was recorded timed at their ``spp``): a round costs half as
+much and is about as steady. Gold α 0.1's 28 fits, a default fit's report
+timed again on the quiet machine (load average 1.1–2; ``python -m
+mi_brdfs.tools.fit.cost REPORT --spp N``): at 32 spp 25 of the 28
+intervals overlapped the report's (timed at 64) and 58 of 378 pairwise
+comparisons by cost class came out otherwise, in 41 s; at 64 spp, 26 and 69,
+in 74 s; at 16 spp, 25 and 75, in 31 s, its ratios drawn towards 1 by what
+a render costs whatever its samples (a 1-spp render took 0.010–0.024 s of
+CPU, a 64-spp one 0.30–0.41 s).
+
 What a round times (``cost_timing``, :func:`timed_render`): the CPU time of
 the rendering process (``cpu``, every thread's, the default), its wall-clock
 time (``wall``), or the sum of Dr.Jit's kernel history ``execution_time``
@@ -228,7 +239,7 @@ def measure_costs(target, records: list[dict], settings, show=None) -> None:
     if not ok:
         return
     try:
-        target_worker = Worker(target, settings.res, settings.spp)
+        target_worker = Worker(target, settings.res, settings.cost_spp)
     except CostError as error:
         for r in ok:
             r["cost_error"] = f"the target's cost worker failed: {error}"
@@ -241,13 +252,14 @@ def measure_costs(target, records: list[dict], settings, show=None) -> None:
                 load = os.getloadavg()[0]
                 try:
                     if model_worker is None:
-                        model_worker = Worker(r["parameters"], settings.res, settings.spp)
+                        model_worker = Worker(r["parameters"], settings.res, settings.cost_spp)
                     else:
                         model_worker.load(r["parameters"])
                     r.update(compare(target_worker, model_worker, settings.cost_rounds,
                                      settings.cost_tolerance, timing))
                     r["ops_ratio"] = model_worker.ops / target_worker.ops
                     r["ops"] = model_worker.ops
+                    r["cost_spp"] = settings.cost_spp
                 except CostError as error:
                     r["cost_error"] = str(error)
                     if model_worker is not None:       # a fresh process for the next one
@@ -339,8 +351,8 @@ def steadiness(report_dir: str, max_targets: int | None = 1, models: list[str] |
     rows = []
     for spec in specs:
         mine = [r for r in saved if r["target"] == spec]
-        with Worker(T.parse([spec])[0], settings.res, settings.spp) as target_worker, \
-                Worker(mine[0]["parameters"], settings.res, settings.spp) as model_worker:
+        with Worker(T.parse([spec])[0], settings.res, settings.cost_spp) as target_worker, \
+                Worker(mine[0]["parameters"], settings.res, settings.cost_spp) as model_worker:
             for repeat in range(repeats):
                 for r in mine:
                     model_worker.load(r["parameters"])
@@ -370,16 +382,23 @@ def main(argv: list[str] | None = None) -> int:
                         "same 12 rounds, twice, and print each one's spread")
     p.add_argument("--models", nargs="+", default=None, metavar="NAME",
                    help="with --timings: only these models")
+    p.add_argument("--spp", type=int, default=FULL.cost_spp,
+                   help=f"samples per pixel of a timed render (default {FULL.cost_spp})")
     args = p.parse_args(argv)
+    if args.spp < 1:
+        print(f"{p.prog}: error: --spp {args.spp}: give at least 1", file=sys.stderr)
+        return 1
     if args.timings:
         try:
-            steadiness(args.report, args.targets or 1, args.models)
+            steadiness(args.report, args.targets or 1, args.models,
+                       settings=FULL.replace(cost_spp=args.spp))
         except Exception as error:
             print(f"{p.prog}: error: {one_line(error)}", file=sys.stderr)
             return 1
         return 0
+    start = time.perf_counter()
     try:
-        rows = remeasure(args.report, args.targets)
+        rows = remeasure(args.report, args.targets, FULL.replace(cost_spp=args.spp))
     except Exception as error:
         print(f"{p.prog}: error: {one_line(error)}", file=sys.stderr)
         return 1
@@ -395,7 +414,8 @@ def main(argv: list[str] | None = None) -> int:
     changed, pairs = calls_changed(rows)
     print(f"\n{sum(r['overlap'] for r in both)} of {len(both)} intervals overlap; "
           f"high/low median {statistics.median(widths):.3f}, largest {max(widths):.3f}; "
-          f"{changed} of {pairs} pairwise cost comparisons (by cost class) came out otherwise")
+          f"{changed} of {pairs} pairwise cost comparisons (by cost class) came out otherwise; "
+          f"{args.spp} spp, {time.perf_counter() - start:.0f} s")
     return 0
 
 

@@ -24,6 +24,7 @@
     :func:`.rank.time_to_noise`, the cost the verdict compares; absent in
     records made before the variance was measured),
     ``cost_rounds``, ``cost_timing`` (what a round timed: :data:`.cost.TIMINGS`),
+    ``cost_spp`` (a timed render's samples per pixel; absent: the views' ``spp``),
     ``cost_closed`` (the interval reached the tolerance),
     ``cost_load`` and ``cost_cores`` (the machine's load average when it was
     timed, and its cores), ``ops``, ``reruns`` and ``worker`` (a task re-run
@@ -60,7 +61,7 @@ FIELDS = ("target", "model", "plugin", "rank", "parameters", "image_flip", "imag
 EXTRA = ("image_views", "image_noise_flip", "image_noise_relmse", "noise_ratio", "noise_low",
          "noise_high", "noise_seeds", "noise_spp", "time_to_noise", "effective", "albedo",
          "target_albedo", "cost_rounds", "cost_closed", "cost_aim", "cost_load", "cost_cores", "ops",
-         "cost_timing", "reruns", "worker",
+         "cost_timing", "cost_spp", "reruns", "worker",
          "target_features", "xml", "renders", "start_errors", "error", "cost_error")
 CSV_EXTRA = ("effective", "image_noise_flip", "noise_ratio", "noise_low", "noise_high",
              "time_to_noise", "cost_rounds", "cost_load", "reruns", "xml", "error")
@@ -89,6 +90,8 @@ def write(out: str, records: list[dict], settings, command: str, features: dict 
     if timed and "cost_timing" not in timed[0]:   # records timed before cost_timing existed:
         settings = settings.replace(cost_timing="wall", cost_rounds=(6, 40),  # by wall clock
                                     cost_tolerance=rank.EARLIER_AIM - 1.0)
+    if timed and "cost_spp" not in timed[0]:      # timed before cost_spp: at the views' spp
+        settings = settings.replace(cost_spp=settings.spp)
     by_target: dict[str, list[dict]] = {}
     for r in records:
         by_target.setdefault(r["target_name"], []).append(r)
@@ -350,8 +353,8 @@ front, the ★ and the verdict use that one rule. The verdict's cheaper model is
 whose FLIP is within the tolerance of the best: the target's seed noise (the target against
 itself at another seed; {rank.LOOKS_SAME} without renders); if none is, it says so.
 {html.escape(BRDF_ERROR, quote=False)}.
-Cost, in three columns: the <b>time per sample</b>, the model's {TIMED.get(s.cost_timing, s.cost_timing)} over the target's,
-until the 90 % interval is within {s.cost_tolerance:.0%} or after
+Cost, in three columns: the <b>time per sample</b>, the model's {TIMED.get(s.cost_timing, s.cost_timing)} over the target's
+(the environment view at {s.cost_spp} spp), until the 90 % interval is within {s.cost_tolerance:.0%} or after
 {s.cost_rounds[1]} rounds (at least {s.cost_rounds[0]}); the <b>variance at equal samples</b>,
 the model's pixel variance over the target's, each relative to its own image (relMSE's noise
 term over the sphere's pixels of the views, from {s.noise_seeds} renders each at {s.noise_spp}

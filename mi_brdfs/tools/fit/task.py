@@ -51,13 +51,14 @@ class Settings(SettingsBase):
     #   (as sure as the variance ratio, the time to the same noise's other factor: its
     #   intervals read high/low 1.03-1.29, median about 1.1; cost.py's docstring)
     cost_timing: str = "cpu"                 # cost: what a round times (cost.TIMINGS)
+    cost_spp: int = 32                       # cost: samples per pixel of a timed render
     noise_seeds: int = 8                     # noise: renders at this many seeds per view
     noise_spp: int = 4                       # noise: at this many samples per pixel each
 
 
 FULL = Settings()
 QUICK = Settings(viewers=(8, 4), uniform=(8, 8), lobe=16, res=48,
-                 spp=16, cost_rounds=(3, 6), noise_seeds=6)
+                 spp=16, cost_rounds=(3, 6), cost_spp=16, noise_seeds=6)
 
 
 def slices(bsdf) -> list[list[list[float]]]:

@@ -375,8 +375,9 @@ def fit_time(s: Settings, refs: References) -> list[dict]:
     """mi-brdfs fit's own time on one material (gold α 0.1, the trade sweep's
     first): a default fit and a --quick fit against every course model, the
     median wall time of three runs, split into the fits (the command's
-    processes, :func:`..fit.sweep.default_jobs`) and the render costs timed after them, with the load average before and
-    after (the machine's other work slows both). --quick (CI): one --quick
+    processes, :func:`..fit.sweep.default_jobs`) and the render costs timed
+    after them, with the load average before and after (the machine's other
+    work slows both). --quick (CI): one --quick
     fit of one model with two timing rounds."""
     from ..fit import FULL as FIT_FULL, QUICK as FIT_QUICK
     if s is not FULL:

@@ -441,3 +441,24 @@ def test_the_committed_benchmarks_folder_takes_a_new_run():
     from mi_brdfs.tools import destinations
     folder = os.path.join(os.path.dirname(__file__), "..", "..", "docs", "benchmarks")
     destinations.check_report_dir(folder)
+
+
+def test_the_trade_finding_names_the_verdicts_cheaper_model_only():
+    """The trade finding's cheaper model is the one the fit report's verdict
+    chose (a lower cost class and a FLIP within the seed noise), not merely
+    the best one timed cheaper beyond its interval: here lambert is cheaper
+    beyond the interval but looks nothing like gold."""
+    from mi_brdfs.tools.bench import report as bench_report
+
+    def row(model, rank, flip, cost, chosen=False):
+        return {"material": "Au", "model": model, "rank": rank, "image_flip": flip,
+                "brdf_error": 0.1, "cost_ratio": cost, "cost_low": cost * 0.97,
+                "cost_high": cost * 1.03, "time_to_noise": [cost, cost - 0.05, cost + 0.05],
+                "looks_same_cheaper": chosen, "failed": ""}
+    rows = [row("conductor", 1, 0.003, 1.0), row("lambert", 2, 0.7, 0.7)]
+    text = bench_report.trade(rows)
+    assert "no cheaper model looks the same" in text and "lambert" not in text
+    rows.append(row("f82", 3, 0.01, 0.9, chosen=True))
+    text = bench_report.trade(rows)
+    assert "cheaper and looking the same f82" in text and "lambert" not in text
+    assert "time to the same noise 0.90x (0.85-0.95)" in text

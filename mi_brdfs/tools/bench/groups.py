@@ -23,6 +23,7 @@ import mitsuba as mi
 from ...bsdfs import cases
 from ...bsdfs.compensation import AlbedoSpec
 from ..explore import latency
+from ..fit import rank
 from ..fit.trade import TARGETS, fit_materials
 from ..measures import relmse
 from ..tables import build
@@ -334,9 +335,15 @@ def trade(s: Settings, refs: References, out_dir: str) -> list[dict]:
                             targets=targets, models=list(s.trade_models) or None,
                             show=lambda *a: None)
     keys = ("model", "rank", "image_flip", "image_relmse", "brdf_error", "cost_ratio", "cost_low",
-            "cost_high", "ops_ratio", "seconds")
+            "cost_high", "time_to_noise", "ops_ratio", "seconds")
+    chosen = set()           # the verdict's cheaper model that looks the same, per material
+    for spec in labels:
+        alt = rank.cheaper_alternative(rank.ranked([r for r in records if r["target"] == spec]))
+        if alt is not None:
+            chosen.add(id(alt))
     return [{"material": labels[r["target"]], **{k: r.get(k) for k in keys},
-             "failed": r.get("error", "")} for r in records]
+             "looks_same_cheaper": id(r) in chosen, "failed": r.get("error", "")}
+            for r in records]
 
 
 FIT_MATERIAL = 0          # the fit group's material: the first of the trade sweep (gold)

@@ -179,29 +179,33 @@ def fit_time(rows: list[dict]) -> str | None:
 
 def trade(rows: list[dict]) -> str | None:
     """The first-ranked model per material (by the image's FLIP, the cheaper
-    of those within its tie band) and the best model that costs less beyond
-    the timing's interval, with their render cost against the material's
-    plugin."""
+    of those within its tie band) and the cheaper model that looks the same,
+    as the fit report's verdict names it (:func:`..fit.rank.cheaper_alternative`,
+    the row's ``looks_same_cheaper``), with their render cost against the
+    material's plugin."""
     done = [r for r in rows if not r["failed"] and r.get("rank") is not None]
     if not done:
         return None
 
     def fit(r):
+        noise = r.get("time_to_noise")
         cost = ("" if r.get("cost_ratio") is None else
-                f", cost {r['cost_ratio']:.2f}x ({r['cost_low']:.2f}-{r['cost_high']:.2f})")
+                f", time per sample {r['cost_ratio']:.2f}x ({r['cost_low']:.2f}-{r['cost_high']:.2f})"
+                + ("" if noise is None else
+                   f", time to the same noise {noise[0]:.2f}x ({noise[1]:.2f}-{noise[2]:.2f})"))
         return f"{r['model']} (FLIP {r['image_flip']:.3f}, BRDF error {r['brdf_error']:.3f}{cost})"
 
     parts = []
     for material in dict.fromkeys(r["material"] for r in done):
         mine = sorted((r for r in done if r["material"] == material), key=lambda r: r["rank"])
         best = mine[0]
-        cheap = [r for r in mine if r.get("cost_high") is not None and best.get("cost_low")
-                 is not None and r["cost_high"] < best["cost_low"]]
-        alt = min(cheap, key=lambda r: r["image_flip"]) if cheap else None
-        parts.append(f"{material}: {fit(best)}" + (f", or cheaper {fit(alt)}" if alt else ""))
+        alt = next((r for r in mine if r.get("looks_same_cheaper")), None)
+        parts.append(f"{material}: {fit(best)}" + (f", or cheaper and looking the same {fit(alt)}"
+                                                   if alt else ", no cheaper model looks the same"))
     return ("Which model for which material (ranked by the image's FLIP over three standard "
             "views; BRDF error 0 = identical, 1 = black; render cost against the material's own "
-            "plugin, a 90 % interval): " + "; ".join(parts) + ". The fit report with every "
+            "plugin, a 90 % interval; the cheaper model is the fit report's: in a lower cost "
+            "class, with a FLIP within the material's seed noise of the best): " + "; ".join(parts) + ". The fit report with every "
             "model's errors, renders and XML is in trade/index.html.")
 
 

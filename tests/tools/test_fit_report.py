@@ -130,6 +130,22 @@ def test_the_committed_trade_report_has_contents_and_links_back():
     assert_contents_link_each_section(page, targets)
 
 
+def test_a_report_states_the_samples_its_costs_were_timed_at(tmp_path):
+    """The committed sweep's page gives the spp its records were timed at;
+    records that predate cost_spp are said to be timed at their views' spp."""
+    folder = ROOT / "docs" / "benchmarks" / "trade"
+    records = json.loads((folder / "fits.json").read_text())
+    spp = {r["cost_spp"] for r in records if r.get("cost_ratio") is not None}
+    assert len(spp) == 1
+    assert f"(the environment view at {spp.pop()} spp)" in (folder / "index.html").read_text()
+    from mi_brdfs.tools.fit import report
+    older = [{k: v for k, v in r.items() if k != "cost_spp"} for r in records[:3]]
+    for r in older:
+        r["target_name"] = r["target"]
+    report.write(str(tmp_path), older, task.FULL, "test")
+    assert f"(the environment view at {task.FULL.spp} spp)" in (tmp_path / "index.html").read_text()
+
+
 def test_the_committed_trade_report_reads_as_labels_and_full_size_slices():
     """Each section's heading is the material's short label (the sweep's own,
     not its spec, which follows in code), and each lobe-slice figure links to

@@ -721,3 +721,14 @@ def test_explore_page_latencies_are_the_committed_run():
     met = drag["median_ms"] <= 100 and first["median_ms"] <= 250
     assert ("Quiet, the page meets\nboth" in guide) == met
     assert f"follow a drag in {drag['median_ms']:.0f} ms" in guide
+
+
+def test_the_fit_guide_says_how_long_a_fit_takes_as_the_bench_measured(site):
+    """The fit guide's "How long" gives the bench's fit group figures
+    (docs/benchmarks/results.json), default and --quick."""
+    rows = {r["fit"]: r for r in committed("benchmarks", "results.json")["groups"]["fit"]}
+    guide = " ".join(text_of(site, "guide/fit.html").split())
+    for name in ("default", "quick"):
+        r = rows[name]
+        assert (f"{r['median_s']:.0f} s for {r['models']} models (median of {r['runs']} runs: "
+                f"{r['fits_s']:.0f} s of fits, {r['costs_s']:.0f} s of costs") in guide, name

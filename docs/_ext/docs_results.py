@@ -155,6 +155,16 @@ def _trade_cheaper_phrase() -> str:
     return f"{len(named)} of the {len(specs)} materials" + (f" ({', '.join(named)})" if named else "")
 
 
+def _fit_time(settings: str) -> str:
+    """How long the bench's fit group measured a fit of one material (its
+    median, the fits' and the costs' shares, the load)."""
+    r = next(r for r in bench()["groups"]["fit"] if r["fit"] == settings)
+    return (f"{r['median_s']:.0f} s for {r['models']} models (median of {r['runs']} runs: "
+            f"{r['fits_s']:.0f} s of fits, "
+            f"{r['costs_s']:.0f} s of costs; load average {r['load_before']:.1f}–"
+            f"{r['load_after']:.1f})")
+
+
 def _fit_models() -> int:
     from mi_brdfs.tools.fit.models import all_models
     return len(all_models())
@@ -178,6 +188,8 @@ RESULTS = {
     "trade.noise": _trade_noise_phrase,
     "trade.below_noise": _trade_below_noise_phrase,
     "trade.cheaper": _trade_cheaper_phrase,
+    "fit.default": lambda: _fit_time("default"),
+    "fit.quick": lambda: _fit_time("quick"),
     "trade.own_cost": lambda: _span([r["cost_ratio"] for r in _trade_first(conductors=True)]),
     "trade.plastics": lambda: _span([r["image_flip"] for r in _trade_first(plugin="roughplastic")]),
     "trade.tie": lambda: f"{max(g for _, g, _ in _trade_checks() if g is not None):.3f}",

@@ -539,6 +539,9 @@ class CookTorrance(BRDF):
                                "under the interface is measured: the walk is the conductor's)")
         if self.options.base == "plastic":
             self.check_plastic(reader)
+        elif self.options.nonlinear:
+            raise reader.error("nonlinear", True, 'false unless base="plastic" (it darkens the '
+                               "plastic substrate's colour; the lambert base has no substrate)")
         if self.options.multiple_scattering == "walk":
             self.check_walk(reader)
         if "material" in props:

@@ -383,6 +383,7 @@ def test_plastic_attributes_are_roughplastics():
       "energy_compensation": True}, "energy_compensation", "True",
      'false with base="plastic" (no random walk of the substrate'),
     ({"fresnel": "f82", "f82_tint": 1.5}, "f82_tint", "1.5", "[0, 1]"),
+    ({"nonlinear": True}, "nonlinear", "True", 'false unless base="plastic"'),
     ({"base": "plastic", "fresnel": "dielectric", "geometry": "smith", "k": 0.5}, "k", "0.5",
      "not given with base=\"plastic\""),
     ({"base": "plastic", "geometry": "smith"}, "fresnel", "'schlick'", '"dielectric"'),

@@ -189,8 +189,9 @@ def trade(rows: list[dict]) -> str | None:
 
     def fit(r):
         noise = r.get("time_to_noise")
-        cost = ("" if r.get("cost_ratio") is None else
-                f", time per sample {r['cost_ratio']:.2f}x ({r['cost_low']:.2f}-{r['cost_high']:.2f})"
+        per_sample = f"{r.get('cost_ratio') or 0:.2f}x ({r.get('cost_low') or 0:.2f}-" \
+                     f"{r.get('cost_high') or 0:.2f})"
+        cost = ("" if r.get("cost_ratio") is None else f", time per sample {per_sample}"
                 + ("" if noise is None else
                    f", time to the same noise {noise[0]:.2f}x ({noise[1]:.2f}-{noise[2]:.2f})"))
         return f"{r['model']} (FLIP {r['image_flip']:.3f}, BRDF error {r['brdf_error']:.3f}{cost})"
@@ -205,8 +206,9 @@ def trade(rows: list[dict]) -> str | None:
     return ("Which model for which material (ranked by the image's FLIP over three standard "
             "views; BRDF error 0 = identical, 1 = black; render cost against the material's own "
             "plugin, a 90 % interval; the cheaper model is the fit report's: in a lower cost "
-            "class, with a FLIP within the material's seed noise of the best): " + "; ".join(parts) + ". The fit report with every "
-            "model's errors, renders and XML is in trade/index.html.")
+            "class, with a FLIP within the material's seed noise of the best): "
+            + "; ".join(parts) + ". The fit report with every model's errors, renders and XML "
+            "is in trade/index.html.")
 
 
 # ----------------------------------------------------------------------------

@@ -1,10 +1,14 @@
 """The bench's figures: one function per group, named after it, given the
 group's rows and returning {file name: matplotlib Figure}; :func:`save` writes
-them. Figures are made without pyplot (no global backend change).
+them. The ladder's needs its renders, not only its rows: its runner draws it
+(:data:`LADDER`, the group's ``drawn``). Figures are made without pyplot (no
+global backend change).
 """
 from __future__ import annotations
 
 import os
+
+import numpy as np
 
 from ..measures import pareto
 from .report import header
@@ -151,3 +155,42 @@ def kernels(rows):
 
 def tracing(rows):
     return {"tracing.png": _per_method(rows, "tracing one call")}
+
+
+LADDER = ("ladder.png",)          # drawn by the ladder group's runner (it needs the renders)
+
+
+def ladder(images: dict, samples: int) -> dict:
+    """The ladder's renders, ``images[(material, lighting, column)]`` (H, W, 3):
+    per material and lighting a row of renders (each rung's mean of
+    ``samples`` samples per pixel, the converged walk last) and under it
+    each rung's difference from the converged walk, in the same exposure (the
+    converged walk's 99.5th percentile is white), red where the rung is
+    brighter."""
+    from ...render.tonemap import srgb_encode
+    cases = list(dict.fromkeys(k[:2] for k in images))
+    columns = list(dict.fromkeys(k[2] for k in images))
+    truth = columns[0]                       # the converged walk comes first in each case
+    shown = columns[1:] + [truth]
+    fig = _figure((1.9 * len(shown), 3.9 * len(cases)))
+    axes = fig.subplots(2 * len(cases), len(shown), squeeze=False)
+    for i, (material, lighting) in enumerate(cases):
+        ref = images[(material, lighting, truth)]
+        lit = ref[ref > 0]
+        white = float(np.percentile(lit, 99.5)) if lit.size else 1.0
+        for j, column in enumerate(shown):
+            image, diff = images[(material, lighting, column)], axes[2 * i + 1][j]
+            axes[2 * i][j].imshow(srgb_encode(np.clip(image / white, 0, 1)))
+            axes[2 * i][j].set_title(f"{column}" + ("" if column == truth else
+                                                   f", {samples} spp"), fontsize=7)
+            if column != truth:
+                shade = diff.imshow((image - ref).mean(axis=-1) / white, cmap="RdBu_r",
+                                    vmin=-0.25, vmax=0.25)
+                diff.set_title(f"{column} − converged walk", fontsize=7)
+            for ax in (axes[2 * i][j], diff):
+                ax.set_xticks([])
+                ax.set_yticks([])
+        axes[2 * i][0].set_ylabel(f"{material}\n{lighting}", fontsize=7)
+        axes[2 * i + 1][-1].axis("off")
+        fig.colorbar(shade, ax=axes[2 * i + 1][-1], fraction=0.8, label="difference / white")
+    return {LADDER[0]: fig}

@@ -161,36 +161,38 @@ LADDER = ("ladder.png",)          # drawn by the ladder group's runner (it needs
 
 
 def ladder(images: dict, samples: int) -> dict:
-    """The ladder's renders, ``images[(material, lighting, column)]`` (H, W, 3):
-    per material and lighting a row of renders (each rung's mean of
-    ``samples`` samples per pixel, the converged walk last) and under it
-    each rung's difference from the converged walk, in the same exposure (the
-    converged walk's 99.5th percentile is white), red where the rung is
-    brighter."""
+    """The ladder's renders, ``images[(material, lighting, column)]`` (H, W, 3),
+    the converged walk each case's first column: a row per material and
+    lighting, each rung's mean of ``samples`` samples per pixel and the
+    converged walk, then each rung's difference from the converged walk, all
+    in one exposure per row (the converged walk's 99.5th percentile is
+    white), red where the rung is brighter."""
     from ...render.tonemap import srgb_encode
     cases = list(dict.fromkeys(k[:2] for k in images))
     columns = list(dict.fromkeys(k[2] for k in images))
-    truth = columns[0]                       # the converged walk comes first in each case
-    shown = columns[1:] + [truth]
-    fig = _figure((1.9 * len(shown), 3.9 * len(cases)))
-    axes = fig.subplots(2 * len(cases), len(shown), squeeze=False)
-    for i, (material, lighting) in enumerate(cases):
+    truth, rungs = columns[0], columns[1:]
+    n = 2 * len(rungs) + 1                            # renders, the converged walk, differences
+    fig = _figure((1.5 * n + 0.6, 1.6 * len(cases)))
+    axes = fig.subplots(len(cases), n + 1, squeeze=False,
+                        gridspec_kw={"width_ratios": [1] * n + [0.08]})   # last: the colour bar
+    for row, (material, lighting) in zip(axes, cases):
         ref = images[(material, lighting, truth)]
         lit = ref[ref > 0]
         white = float(np.percentile(lit, 99.5)) if lit.size else 1.0
-        for j, column in enumerate(shown):
-            image, diff = images[(material, lighting, column)], axes[2 * i + 1][j]
-            axes[2 * i][j].imshow(srgb_encode(np.clip(image / white, 0, 1)))
-            axes[2 * i][j].set_title(f"{column}" + ("" if column == truth else
-                                                   f", {samples} spp"), fontsize=7)
-            if column != truth:
-                shade = diff.imshow((image - ref).mean(axis=-1) / white, cmap="RdBu_r",
-                                    vmin=-0.25, vmax=0.25)
-                diff.set_title(f"{column} − converged walk", fontsize=7)
-            for ax in (axes[2 * i][j], diff):
-                ax.set_xticks([])
-                ax.set_yticks([])
-        axes[2 * i][0].set_ylabel(f"{material}\n{lighting}", fontsize=7)
-        axes[2 * i + 1][-1].axis("off")
-        fig.colorbar(shade, ax=axes[2 * i + 1][-1], fraction=0.8, label="difference / white")
+        for ax, column in zip(row, rungs + [truth]):
+            ax.imshow(srgb_encode(np.clip(images[(material, lighting, column)] / white, 0, 1)))
+            ax.set_title(column if column == truth else f"{column}, {samples} spp", fontsize=7)
+        for ax, column in zip(row[len(rungs) + 1:], rungs):
+            diff = (images[(material, lighting, column)] - ref).mean(axis=-1) / white
+            shade = ax.imshow(diff, cmap="RdBu_r", vmin=-0.25, vmax=0.25)
+            ax.set_title(f"{column} − converged", fontsize=7)
+        for ax in row[:n]:
+            ax.set_xticks([])
+            ax.set_yticks([])
+        row[0].set_ylabel(f"{material}\n{lighting}", fontsize=7)
+    for ax in axes[1:, n]:
+        ax.axis("off")
+    bar = fig.colorbar(shade, cax=axes[0, n])
+    bar.set_label("difference / white", fontsize=7)
+    bar.ax.tick_params(labelsize=6)
     return {LADDER[0]: fig}

@@ -8,7 +8,7 @@ import sys
 
 import pytest
 
-from mi_brdfs.tools.bench import ladder as rungs
+from mi_brdfs.tools.bench import ladder as rungs, report
 
 
 @pytest.fixture(scope="module")
@@ -35,7 +35,9 @@ def test_every_case_has_its_row_and_the_picture(ladder):
             assert isinstance(row[key], float) and math.isfinite(row[key]), (key, row)
         assert row["median_s"] > 0 and 0 <= row["flip"] <= 1 and row["light_vs_walk"] > 0
     assert results["plots"]["ladder"] == ["ladder.png"] and (out / "ladder.png").stat().st_size
-    assert "](ladder.png)" in (out / "README.md").read_text()
+    readme = (out / "README.md").read_text()
+    assert "](ladder.png)" in readme and "## The multiple-scattering ladder (`ladder`)" in readme
+    assert [report.header(k) for k in rows[next(iter(rows))] if "_" in report.header(k)] == []
 
 
 def test_unknown_lighting_is_one_line():

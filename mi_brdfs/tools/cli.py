@@ -221,8 +221,8 @@ COMPARE_LIMITS = {
 # bench's groups in their order (bench.groups.GROUPS, which needs the reports
 # extra to import: the parser of every command must not)
 BENCH_GROUPS = ("builtin", "models", "oren_nayar", "sampling", "integrators", "convergence",
-                "scaling", "lobes", "energy", "materials", "frozen", "kernels", "tracing",
-                "explore", "trade", "fit")
+                "scaling", "lobes", "energy", "ladder", "materials", "frozen", "kernels",
+                "tracing", "explore", "trade", "fit")
 
 
 def parser() -> Parser:

@@ -111,9 +111,12 @@ def measure(tmp: str, names: list[str], quick: bool, settings: Settings, refs: R
         results["groups"][name] = group.run(settings, refs, *([tmp] if group.writes else []))
         results["group_seconds"][name] = time.perf_counter() - group_start
     results["seconds"] = time.perf_counter() - start
-    results["plots"] = {name: plots.save(tmp, GROUPS[name].plots(rows))
-                        for name, rows in results["groups"].items()
-                        if rows and GROUPS[name].plots}
+    results["plots"] = {}
+    for name, rows in results["groups"].items():
+        group = GROUPS[name]
+        if rows and (group.plots or group.drawn):
+            results["plots"][name] = ((plots.save(tmp, group.plots(rows)) if group.plots else [])
+                                      + list(group.drawn))
     return report.with_runs(results)
 
 

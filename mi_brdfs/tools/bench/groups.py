@@ -27,7 +27,7 @@ from ..fit import rank
 from ..fit.trade import TARGETS, fit_materials
 from ..measures import relmse
 from ..tables import build
-from . import plots, report
+from . import ladder as rungs, plots, report
 from .measure import FULL, References, Settings, alternating, efficiency, image, scene_dict, timed
 from .workers import in_subprocess
 
@@ -218,6 +218,37 @@ def energy(s: Settings, refs: References) -> list[dict]:
     return rows
 
 
+def ladder(s: Settings, refs: References, out_dir: str) -> list[dict]:
+    """The multiple-scattering ladder (tools/bench/ladder.py): cook_torrance
+    (GGX, Smith G) on a rough gold and a rough white sphere, in the fit's
+    environment and under a directional light from behind the sphere (160°
+    off the camera's axis) and from behind the camera (10°), at each rung:
+    single scattering, the separable energy-compensation lobe, the random
+    walk in the renderer. Per rung: the median render time (one BSDF alive
+    in the process) and over single scattering's, the noise (expected relMSE
+    of one render against its own mean), one render's relMSE and HDR-FLIP
+    against a converged render of the walk, the FLIP of the renders' mean,
+    and the light reflected to the camera over the walk's (sums over the
+    sphere's pixels); ladder.png shows the renders and their differences
+    from the converged walk."""
+    rows, images = [], {}
+    for material, _ in rungs.MATERIALS:
+        for lighting in rungs.LIGHTINGS:
+            truth = rungs.reference(material, lighting, s.ladder_res, refs)
+            images[(material, lighting, f"{rungs.TRUTH}, converged")] = truth
+            mine = []
+            for rung, _ in rungs.RUNGS:
+                case = rungs.measure(material, lighting, rung, s.ladder_res, s.spp, s.repeats,
+                                     truth)
+                mine.append(case.row)
+                images[(material, lighting, rung)] = case.mean
+            for r in mine:
+                r["time_vs_single"] = r["median_s"] / mine[0]["median_s"]
+            rows += mine
+    plots.save(out_dir, plots.ladder(images, s.repeats * s.spp))
+    return rows
+
+
 # ----------------------------------------------------------------------------
 #  In processes of their own (workers.py)
 # ----------------------------------------------------------------------------
@@ -403,6 +434,7 @@ class Group:
     finding: Callable[[list[dict]], str | None] | None = None    # report.py
     plots: Callable[[list[dict]], dict] | None = None             # plots.py
     writes: bool = False      # run() also writes files: it gets out_dir, the report folder
+    drawn: tuple[str, ...] = ()   # figures run() draws itself (they need more than its rows)
 
     @property
     def about(self) -> str:
@@ -420,6 +452,7 @@ GROUPS: dict[str, Group] = {g.name: g for g in [
     Group("scaling", scaling, report.scaling, plots.scaling),
     Group("lobes", lobes, report.lobes, plots.lobes),
     Group("energy", energy, report.energy),
+    Group("ladder", ladder, report.ladder, writes=True, drawn=plots.LADDER),
     Group("materials", materials, report.materials, plots.materials),
     Group("frozen", frozen, report.frozen, plots.frozen),
     Group("kernels", kernels, report.kernels, plots.kernels),

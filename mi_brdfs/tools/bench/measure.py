@@ -54,6 +54,7 @@ class Settings(settings.Settings):
     table_samples: int                # quadrature samples per axis of a table build (energy)
     trade_targets: int                # materials of the fit sweep (trade; 0: every one)
     trade_models: tuple[str, ...]     # models it fits (empty: every course model)
+    ladder_res: int                   # pixels across the ladder's sphere renders (ladder)
 
 
 # --quick: a smoke test that every group runs (tiny scene, few repeats): its
@@ -62,13 +63,13 @@ QUICK = Settings(res=24, spp=4, repeats=3, ref_spp=64, spp_ladder=(1, 2, 4, 8),
                  resolutions=(16, 32), light_counts=(1, 2, 4), table_resolutions=(8, 32),
                  materials=(1, 3), materials_res=16, materials_spp=4, frozen_passes=(1, 2, 4),
                  rounds=1, kernel_lanes=2**14, table_samples=8, trade_targets=1,
-                 trade_models=("lambert", "cook_torrance/ggx/smith"))
+                 trade_models=("lambert", "cook_torrance/ggx/smith"), ladder_res=24)
 FULL = Settings(res=192, spp=16, repeats=7, ref_spp=4096, spp_ladder=(1, 2, 4, 8, 16, 32, 64, 128),
                 resolutions=(64, 128, 256, 512), light_counts=(1, 2, 4, 8, 16, 32),
                 table_resolutions=(4, 8, 16, 32, 64, 128, 256),
                 materials=(1, 10, 50, 200), materials_res=128, materials_spp=64,
                 frozen_passes=(1, 8, 32), rounds=3, kernel_lanes=2**22, table_samples=128,
-                trade_targets=0, trade_models=())
+                trade_targets=0, trade_models=(), ladder_res=128)
 
 
 # ----------------------------------------------------------------------------

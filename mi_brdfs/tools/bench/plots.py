@@ -1,10 +1,14 @@
 """The bench's figures: one function per group, named after it, given the
 group's rows and returning {file name: matplotlib Figure}; :func:`save` writes
-them. Figures are made without pyplot (no global backend change).
+them. The ladder's needs its renders, not only its rows: its runner draws it
+(:data:`LADDER`, the group's ``drawn``). Figures are made without pyplot (no
+global backend change).
 """
 from __future__ import annotations
 
 import os
+
+import numpy as np
 
 from ..measures import pareto
 from .report import header
@@ -151,3 +155,44 @@ def kernels(rows):
 
 def tracing(rows):
     return {"tracing.png": _per_method(rows, "tracing one call")}
+
+
+LADDER = ("ladder.png",)          # drawn by the ladder group's runner (it needs the renders)
+
+
+def ladder(images: dict, samples: int) -> dict:
+    """The ladder's renders, ``images[(material, lighting, column)]`` (H, W, 3),
+    the converged walk each case's first column: a row per material and
+    lighting, each rung's mean of ``samples`` samples per pixel and the
+    converged walk, then each rung's difference from the converged walk, all
+    in one exposure per row (the converged walk's 99.5th percentile is
+    white), red where the rung is brighter."""
+    from ...render.tonemap import srgb_encode
+    cases = list(dict.fromkeys(k[:2] for k in images))
+    columns = list(dict.fromkeys(k[2] for k in images))
+    truth, rungs = columns[0], columns[1:]
+    n = 2 * len(rungs) + 1                            # renders, the converged walk, differences
+    fig = _figure((1.5 * n + 0.6, 1.6 * len(cases)))
+    axes = fig.subplots(len(cases), n + 1, squeeze=False,
+                        gridspec_kw={"width_ratios": [1] * n + [0.08]})   # last: the colour bar
+    for row, (material, lighting) in zip(axes, cases):
+        ref = images[(material, lighting, truth)]
+        lit = ref[ref > 0]
+        white = float(np.percentile(lit, 99.5)) if lit.size else 1.0
+        for ax, column in zip(row, rungs + [truth]):
+            ax.imshow(srgb_encode(np.clip(images[(material, lighting, column)] / white, 0, 1)))
+            ax.set_title(column if column == truth else f"{column}, {samples} spp", fontsize=7)
+        for ax, column in zip(row[len(rungs) + 1:], rungs):
+            diff = (images[(material, lighting, column)] - ref).mean(axis=-1) / white
+            shade = ax.imshow(diff, cmap="RdBu_r", vmin=-0.25, vmax=0.25)
+            ax.set_title(f"{column} − converged", fontsize=7)
+        for ax in row[:n]:
+            ax.set_xticks([])
+            ax.set_yticks([])
+        row[0].set_ylabel(f"{material}\n{lighting}", fontsize=7)
+    for ax in axes[1:, n]:
+        ax.axis("off")
+    bar = fig.colorbar(shade, cax=axes[0, n])
+    bar.set_label("difference / white", fontsize=7)
+    bar.ax.tick_params(labelsize=6)
+    return {LADDER[0]: fig}

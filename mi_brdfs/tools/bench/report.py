@@ -108,6 +108,28 @@ def energy(rows: list[dict]) -> str:
             + ", ".join(f"{r['table']} {r['table_build_s']:.2f} s" for r in tables) + ".")
 
 
+def ladder(rows: list[dict]) -> str:
+    """Per material and lighting, each rung's FLIP against the converged walk
+    and the light it reflects over the walk's; the time and noise of every
+    rung against single scattering's, medians over the cases."""
+    rungs = list(dict.fromkeys(r["rung"] for r in rows))
+    cases = list(dict.fromkeys((r["material"], r["lighting"]) for r in rows))
+    at = {(r["material"], r["lighting"], r["rung"]): r for r in rows}
+    parts = "; ".join(f"{m}, {l}: " + ", ".join(
+        f"{rung} {at[m, l, rung]['flip_mean']:.3f} ({at[m, l, rung]['light_vs_walk']:.3f})"
+        for rung in rungs) for m, l in cases)
+    median = lambda rung, key: float(np.median([at[m, l, rung][key] / at[m, l, rungs[0]][key]
+                                                for m, l in cases]))
+    r0 = rows[0]
+    return (f"Multiple-scattering ladder (cook_torrance, GGX, Smith G; HDR-FLIP of the mean "
+            f"of the timed renders against a converged render of the walk, and in brackets "
+            f"the light reflected to the camera over the walk's): {parts}. Against "
+            f"{rungs[0]}, at {r0['spp']} spp and {r0['res']}² pixels, medians over the "
+            f"cases: " + ", ".join(f"{rung} {median(rung, 'median_s'):.2f}x the time and "
+                                   f"{median(rung, 'noise_relmse'):.2f}x the noise"
+                                   for rung in rungs[1:]) + ".")
+
+
 def materials(rows: list[dict]) -> str:
     """Plugin vs built-in at the largest number of materials, beside the floor
     (a bare Python BSDF), and the tracing cost per material (slope of the warm
@@ -226,6 +248,7 @@ TITLES = {
     "scaling": "Render time against resolution and lights",
     "lobes": "A lobe switched off costs nothing",
     "energy": "What energy compensation costs",
+    "ladder": "The multiple-scattering ladder",
     "materials": "Many materials in one scene",
     "frozen": "Frozen passes",
     "kernels": "The BSDF methods' kernels",
@@ -272,6 +295,12 @@ HEADERS = {
     "costs_s": "of it the render costs (s)",
     "load_before": "load average before",
     "load_after": "load average after",
+    "res": "pixels across",
+    "noise_relmse": "noise: relMSE against its own mean",
+    "flip": "FLIP (HDR) of one render against the converged walk",
+    "flip_mean": "FLIP of the renders' mean",
+    "light_vs_walk": "light over the walk's",
+    "time_vs_single": "time over single scattering's",
 }
 WORDS = {"builtin": "built-in", "first": "first render", "warm": "warm render",
          "peak": "peak memory", "relmse": "relMSE", "vs": "over",

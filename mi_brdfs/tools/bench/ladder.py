@@ -1,0 +1,142 @@
+"""The multiple-scattering ladder: ``cook_torrance`` (GGX, Smith's G) with each
+way the project has of treating the light that bounces between microfacets,
+rendered on the same spheres under the same lights (the bench group
+``ladder``, :func:`.groups.ladder`).
+
+The rungs (:data:`RUNGS`), each a set of options of the plugin:
+
+- ``single``: the microfacet model's single scattering, no compensation;
+- ``separable``: ``energy_compensation``, the separable lobe g(ω_i) g(ω_o) that
+  adds what single scattering misses of the walk's albedo;
+- ``walk``: ``multiple_scattering="walk"``, the random walk on the Smith
+  microsurface evaluated and sampled in the renderer: the truth, noisy.
+
+A new rung (a directional compensation) is one more entry in :data:`RUNGS`.
+The materials (:data:`MATERIALS`) are a rough gold and a rough white
+conductor; the lightings (:data:`LIGHTINGS`) the fit's environment map
+(:func:`..fit.scene.sky`), a directional light from behind the sphere, which
+reaches the camera only near the silhouette, where viewer and light are both
+grazing on either side of the normal (near the mirror pair), and one from
+behind the camera, where at the silhouette they are both grazing on the same
+side (near retro-reflection): the pairs where the separable lobe and the walk
+differ most (issue 36).
+
+The sphere and camera are the fit's standard views' (:mod:`..fit.scene`):
+direct light only (a convex object receives nothing else), the emitters
+hidden, and the errors taken over the sphere's pixels (:func:`..fit.scene.sphere_mask`).
+"""
+from __future__ import annotations
+
+import math
+import statistics
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+import mitsuba as mi
+
+from ..analysis import camera
+from ..compare import masked_flip
+from ..fit import scene as views
+from ..measures import relmse
+from .measure import References
+
+# The plugin every rung is a setting of: GGX with Smith's G, a pure conductor
+# (no diffuse lobe).
+BASE = {"type": "cook_torrance", "distribution": "ggx", "geometry": "smith", "k": 0.0,
+        "mode": "hdr"}
+
+RUNGS: list[tuple[str, dict]] = [            # name, the options that make the rung
+    ("single", {}),
+    ("separable", {"energy_compensation": True}),
+    ("walk", {"multiple_scattering": "walk"}),
+]
+TRUTH = "walk"                                # the rung the converged reference renders
+
+MATERIALS: list[tuple[str, dict]] = [        # name, the material's parameters
+    ("gold α 0.4", {"fresnel": "conductor", "material": "Au", "alpha": 0.4}),
+    ("white α 0.8", {"fresnel": "schlick", "f0": 1.0, "alpha": 0.8}),
+]
+
+# name: where a directional light comes from, (θ off the camera's axis, turned
+# this far above the image's horizontal) in degrees, or None: the environment map.
+LIGHTINGS: dict[str, tuple[float, float] | None] = {
+    "environment": None,
+    "back light": (160.0, 30.0),      # behind the sphere: seen only near the silhouette
+    "front light": (10.0, 135.0),     # behind the camera (the fit's frontal view)
+}
+
+
+def bsdf(material: str, rung: str) -> dict:
+    """The plugin of ``material`` on ``rung``."""
+    return {**BASE, **dict(MATERIALS)[material], **dict(RUNGS)[rung]}
+
+
+def scene_dict(bsdf: dict, res: int, lighting: str) -> dict:
+    """The fit's sphere and camera with ``bsdf`` in ``lighting``."""
+    if lighting not in LIGHTINGS:
+        raise ValueError(f"unknown ladder lighting {lighting!r}; valid: {', '.join(LIGHTINGS)}")
+    d = {"type": "scene",
+         "integrator": {"type": "path", "max_depth": 2, "hide_emitters": True},
+         "sensor": camera(res, views.FOV, origin=(0.0, 0.0, views.DISTANCE)),
+         "sphere": {"type": "sphere", "bsdf": bsdf}}
+    if LIGHTINGS[lighting] is None:
+        d["env"] = {"type": "envmap", "bitmap": mi.Bitmap(views.sky())}
+    else:
+        theta, up = (math.radians(a) for a in LIGHTINGS[lighting])
+        towards = (math.sin(theta) * math.cos(up), math.sin(theta) * math.sin(up),
+                   math.cos(theta))                 # where the light comes from
+        d["key"] = {"type": "directional", "direction": [-c for c in towards],
+                    "irradiance": {"type": "rgb", "value": views.KEY_IRRADIANCE}}
+    return d
+
+
+@dataclass
+class Case:
+    """One (material, lighting, rung): its row and its mean render."""
+    row: dict
+    mean: np.ndarray          # the mean of the timed renders (H, W, 3)
+
+
+def reference(material: str, lighting: str, res: int, refs: References) -> np.ndarray:
+    """The converged render of the walk (cached by ``refs``)."""
+    image = refs.get(scene_dict(bsdf(material, TRUTH), res, lighting))
+    views.release()
+    return image
+
+
+def measure(material: str, lighting: str, rung: str, res: int, spp: int, repeats: int,
+            truth: np.ndarray) -> Case:
+    """Render ``rung`` of ``material`` in ``lighting`` once to compile, then
+    ``repeats`` times at ``spp`` (seeds 1, 2, ...), the only BSDF alive in the
+    process (Dr.Jit traces every live instance at every render).
+
+    The row: the median render time; the noise, the expected relMSE of one
+    render against its own expectation (the per-pixel variance over the
+    renders, weighed by the converged walk ``truth`` as relMSE weighs a
+    render: (truth + 0.01)²); one render's relMSE and HDR-FLIP against
+    ``truth``; the FLIP of the renders' mean (mostly what the rung gets
+    wrong, less its noise); and the light it reflects towards the camera, the
+    sum of that mean over the sphere's pixels, against the walk's."""
+    scene = mi.load_dict(scene_dict(bsdf(material, rung), res, lighting), parallel=False)
+    images, seconds = [], []
+    for seed in range(repeats + 1):               # seed 0 compiles
+        start = time.perf_counter()
+        images.append(views.render(scene, spp, seed))
+        seconds.append(time.perf_counter() - start)
+    images, seconds = images[1:], seconds[1:]
+    del scene
+    views.release()
+    stack = np.stack(images)
+    mean = stack.mean(axis=0)
+    on = ~views.sphere_mask(res)
+    weight = 1.0 / (truth[on] + 0.01) ** 2
+    row = {"material": material, "lighting": lighting, "rung": rung, "res": res, "spp": spp,
+           "median_s": statistics.median(seconds),
+           "noise_relmse": float(np.mean(stack.var(axis=0, ddof=1)[on] * weight)),
+           "relmse": relmse(images[0][on], truth[on]),
+           "flip": masked_flip(truth, images[0], "hdr", ~on)[0],
+           "flip_mean": masked_flip(truth, mean, "hdr", ~on)[0],
+           "light_vs_walk": float(mean[on].sum() / truth[on].sum())}
+    return Case(row, mean)

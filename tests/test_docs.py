@@ -732,3 +732,22 @@ def test_the_fit_guide_says_how_long_a_fit_takes_as_the_bench_measured(site):
         r = rows[name]
         assert (f"{r['median_s']:.0f} s for {r['models']} models (median of {r['runs']} runs: "
                 f"{r['fits_s']:.0f} s of fits, {r['costs_s']:.0f} s of costs") in guide, name
+
+
+def test_the_energy_guides_ladder_tables_are_the_committed_run(site):
+    """The energy guide's two ladder tables are the bench's committed ladder
+    rows (docs/benchmarks/results.json): per material and lighting, each
+    rung's FLIP and light over the walk's, its time over single scattering's
+    and its noise (10⁻³, two significant digits)."""
+    rows = committed("benchmarks", "results.json")["groups"]["ladder"]
+    text = read(site, "guide/energy.html")
+    lines = [plain(row) for row in re.findall(r"<tr[^>]*>(.*?)</tr>", text, re.S)]
+    for case in dict.fromkeys((r["material"], r["lighting"]) for r in rows):
+        mine = {r["rung"]: r for r in rows if (r["material"], r["lighting"]) == case}
+        found = [line for line in lines if line.startswith(f"{case[0]}, {case[1]}")]
+        assert len(found) == 2, (case, found)
+        for rung in ("single", "separable", "walk"):
+            r = mine[rung]
+            assert f"{r['flip_mean']:.3f}, {r['light_vs_walk']:.3f}" in found[0], (case, rung)
+            noise = f"{r['noise_relmse'] * 1e3:.2g}"
+            assert f"{r['time_vs_single']:.2f}×, {noise}" in found[1], (case, rung, noise)

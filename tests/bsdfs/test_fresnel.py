@@ -217,6 +217,44 @@ def test_compensated_conductor_per_wavelength(rng, variant):
                 assert ours[j] == pytest.approx(value, rel=1e-4, abs=1e-7)
 
 
+def walk_f0_np(F) -> np.ndarray:
+    """The walk tables' F0 for a Fresnel form (NumPy): the Schlick curve's
+    F0 of the same hemispherical average, (21 F_avg - 1)/20 in [0, 1]."""
+    return np.clip((21.0 * hemispherical_average(F) - 1.0) / 20.0, 0.0, 1.0)
+
+
+def test_the_walk_f0_of_constant_indices_is_computed_once(rng):
+    """Compensated with the exact Fresnel of constant indices (RGB), the
+    walk tables' F0 is computed at load, not at every call: it is the NumPy
+    F_avg's Schlick equivalent per channel, and eval is that of the same
+    indices through a texture (read per point, the F0 computed per call);
+    differentiated indices are read per call too."""
+    eta, kappa = np.array([0.2, 0.5, 1.4]), np.array([3.0, 2.4, 1.8])
+    common = {"type": "cook_torrance", "fresnel": "conductor", "k": 0.0, "geometry": "smith",
+              "distribution": "ggx", "alpha": 0.5, "energy_compensation": True}
+    once = mi.load_dict({**common, "eta": rgb(eta), "kappa": rgb(kappa)})
+    assert once.state.f0_walk
+    expected = [walk_f0_np(lambda mu, e=e, k=k: conductor_np(mu, e, k)) for e, k in zip(eta, kappa)]
+    np.testing.assert_allclose(np.array(once.m_f0_walk).ravel(), expected, atol=2e-5)
+    unbounded = lambda v: {"type": "srgb", "color": list(map(float, v)), "unbounded": True}
+    textured = {name: {"type": "checkerboard", "color0": unbounded(v), "color1": unbounded(v)}
+                for name, v in (("eta", eta), ("kappa", kappa))}
+    per_call = mi.load_dict({**common, **textured})
+    assert not per_call.state.f0_walk
+    wi, wo = random_hemisphere(rng, 2048, 0.05), random_hemisphere(rng, 2048, 0.05)
+    a, b = eval_and_pdf(once, wi, wo)[0], eval_and_pdf(per_call, wi, wo)[0]
+    np.testing.assert_allclose(a, b, rtol=1e-5, atol=1e-7)
+    assert np.ptp(a.sum(axis=1)) > 0                     # not all black
+    params = mi.traverse(once)
+    dr.enable_grad(params["eta.value"])
+    params.update()
+    assert not once.state.f0_walk
+    dielectric = mi.load_dict({**common, "fresnel": "dielectric", "int_ior": 1.5, "ext_ior": 1.0})
+    assert dielectric.state.f0_walk
+    assert float(np.array(dielectric.m_f0_walk).ravel()[0]) == pytest.approx(
+        walk_f0_np(lambda mu: conductor_np(mu, 1.5, 0.0)), abs=2e-5)
+
+
 def test_conductor_matches_numpy(rng):
     """cook_torrance's eval with the exact conductor against the lecture's
     Cook-Torrance (NumPy) with the NumPy conductor F in place of Schlick's."""

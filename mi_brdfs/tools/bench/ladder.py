@@ -27,7 +27,6 @@ hidden, and the errors taken over the sphere's pixels (:func:`..fit.scene.sphere
 """
 from __future__ import annotations
 
-import math
 import statistics
 import time
 from dataclasses import dataclass
@@ -36,7 +35,6 @@ import numpy as np
 
 import mitsuba as mi
 
-from ..analysis import camera
 from ..compare import masked_flip
 from ..fit import scene as views
 from ..measures import relmse
@@ -59,12 +57,13 @@ MATERIALS: list[tuple[str, dict]] = [        # name, the material's parameters
     ("white α 0.8", {"fresnel": "schlick", "f0": 1.0, "alpha": 0.8}),
 ]
 
-# name: where a directional light comes from, (θ off the camera's axis, turned
-# this far above the image's horizontal) in degrees, or None: the environment map.
-LIGHTINGS: dict[str, tuple[float, float] | None] = {
+# name: the directional light's direction (fit.scene.light_from: θ off the camera's
+# axis, turned this far above the image's horizontal, in degrees), or None: the
+# environment map.
+LIGHTINGS: dict[str, list[float] | None] = {
     "environment": None,
-    "back light": (160.0, 30.0),      # behind the sphere: seen only near the silhouette
-    "front light": (10.0, 135.0),     # behind the camera (the fit's frontal view)
+    "back light": views.light_from(160.0, 30.0),   # behind the sphere: seen only near the silhouette
+    "front light": views.VIEWS["frontal"],         # behind the camera (the fit's frontal view)
 }
 
 
@@ -77,19 +76,7 @@ def scene_dict(bsdf: dict, res: int, lighting: str) -> dict:
     """The fit's sphere and camera with ``bsdf`` in ``lighting``."""
     if lighting not in LIGHTINGS:
         raise ValueError(f"unknown ladder lighting {lighting!r}; valid: {', '.join(LIGHTINGS)}")
-    d = {"type": "scene",
-         "integrator": {"type": "path", "max_depth": 2, "hide_emitters": True},
-         "sensor": camera(res, views.FOV, origin=(0.0, 0.0, views.DISTANCE)),
-         "sphere": {"type": "sphere", "bsdf": bsdf}}
-    if LIGHTINGS[lighting] is None:
-        d["env"] = {"type": "envmap", "bitmap": mi.Bitmap(views.sky())}
-    else:
-        theta, up = (math.radians(a) for a in LIGHTINGS[lighting])
-        towards = (math.sin(theta) * math.cos(up), math.sin(theta) * math.sin(up),
-                   math.cos(theta))                 # where the light comes from
-        d["key"] = {"type": "directional", "direction": [-c for c in towards],
-                    "irradiance": {"type": "rgb", "value": views.KEY_IRRADIANCE}}
-    return d
+    return views.sphere_scene(bsdf, res, LIGHTINGS[lighting])
 
 
 @dataclass

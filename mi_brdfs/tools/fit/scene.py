@@ -36,7 +36,7 @@ SKY_SIZE = (64, 128)       # equirectangular environment map (rows, columns)
 KEY_IRRADIANCE = 3.0
 
 
-def _from(theta_deg: float, up_deg: float) -> list[float]:
+def light_from(theta_deg: float, up_deg: float) -> list[float]:
     """The direction light travels when it comes from θ off the camera's axis
     (+z), rotated ``up_deg`` above the image's horizontal."""
     t, a = math.radians(theta_deg), math.radians(up_deg)
@@ -46,8 +46,8 @@ def _from(theta_deg: float, up_deg: float) -> list[float]:
 
 VIEWS = {                  # name: emitters besides none (the environment map is built in scene_dict)
     "environment": None,
-    "grazing": _from(80.0, 30.0),
-    "frontal": _from(10.0, 135.0),
+    "grazing": light_from(80.0, 30.0),
+    "frontal": light_from(10.0, 135.0),
 }
 COST_VIEW = "environment"
 
@@ -73,16 +73,23 @@ def scene_dict(bsdf, res: int, view: str = COST_VIEW) -> dict:
     """The sphere with ``bsdf`` (a dictionary or a loaded BSDF) in ``view``."""
     if view not in VIEWS:
         raise ValueError(f"unknown view {view!r}; valid: {', '.join(VIEWS)}")
+    return sphere_scene(bsdf, res, VIEWS[view])
+
+
+def sphere_scene(bsdf, res: int, light: list[float] | None) -> dict:
+    """The standard views' sphere and camera with ``bsdf``, lit by the
+    environment map (``light`` None) or by a directional light travelling
+    along ``light`` (:func:`light_from`)."""
     scene = {
         "type": "scene",
         "integrator": {"type": "path", "max_depth": 2, "hide_emitters": True},
         "sensor": camera(res, FOV, origin=(0.0, 0.0, DISTANCE)),
         "sphere": {"type": "sphere", "bsdf": bsdf},
     }
-    if VIEWS[view] is None:
+    if light is None:
         scene["env"] = {"type": "envmap", "bitmap": mi.Bitmap(sky())}     # +y up, as the camera
     else:
-        scene["key"] = {"type": "directional", "direction": VIEWS[view],
+        scene["key"] = {"type": "directional", "direction": light,
                         "irradiance": {"type": "rgb", "value": KEY_IRRADIANCE}}
     return scene
 

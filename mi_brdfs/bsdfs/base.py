@@ -222,15 +222,18 @@ class BRDF(Mixture):
         """True if parameter ``name`` is the constant ``value`` (0: a black colour
         or a zero weight) and cannot change: not spatially varying, not
         grad-enabled, never updated. Models use it to drop lobes that cannot matter."""
-        if name not in self.state.params or name in self.state.live:
+        if name not in self.state.params or name in self.state.live or not self.uniform(name):
             return False
-        obj = getattr(self, "m_" + name)
-        if grad_enabled(obj):
-            return False
-        if isinstance(obj, mi.Object) and obj.is_spatially_varying():
-            return False
-        rng = value_range(obj)
+        rng = value_range(getattr(self, "m_" + name))
         return rng is not None and rng == (value, value)
+
+    def uniform(self, name: str) -> bool:
+        """True if parameter ``name`` is one value over the surface and not
+        differentiated (it may still be updated: what is derived from it is
+        then derived again with the lobes)."""
+        obj = getattr(self, "m_" + name)
+        return not grad_enabled(obj) and not (isinstance(obj, mi.Object)
+                                              and obj.is_spatially_varying())
 
     def switch(self, name: str):
         """Plain-number parameter ``name`` as the formulas take it: the Python

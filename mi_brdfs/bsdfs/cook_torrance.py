@@ -158,7 +158,7 @@ from .cases import (THETAS_GRAZING, THETAS_LOW, Cases, Chi2, Furnace, Pictures, 
 from .grid import Axis, Grid
 from .microfacet import Microfacet, dot, half_vector
 from .mixture import Float, Scaled, Spectrum, mean
-from .params import Option, Param, Reader, grad_enabled, number, value_range
+from .params import Option, Param, Reader, number, value_range
 
 
 # ----------------------------------------------------------------------------
@@ -721,14 +721,14 @@ class CookTorrance(BRDF):
         point, not differentiated, in an RGB variant (a spectral one reads the
         indices per wavelength). :meth:`update_lobes` then computes it once,
         where each call would run F_avg's quadrature (24 Fresnel evaluations
-        per lane: 1177 traced operations for a compensated gold's eval and
-        sample against 512 without compensation)."""
+        per lane): a compensated gold sphere's render kernels held 5,783
+        operations with it and 3,132 without, and the bench's ladder timed the
+        separable lobe on gold at 3.4-4.9x single scattering's time with it and
+        1.8-3.6x without."""
         form = self.options.fresnel
         if form not in ("conductor", "dielectric") or mi.is_spectral:
             return False
-        members = [getattr(self, "m_" + name) for name in FRESNEL_PARAMS[form]]
-        return not any(grad_enabled(m) or (isinstance(m, mi.Object) and m.is_spatially_varying())
-                       for m in members)
+        return all(self.uniform(name) for name in FRESNEL_PARAMS[form])
 
     def update_lobes(self) -> None:
         self.state.f0 = self.f0_form()    # first: the compensation's preparation reads it

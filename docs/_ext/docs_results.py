@@ -161,8 +161,8 @@ def _fit_time(settings: str) -> str:
     r = next(r for r in bench()["groups"]["fit"] if r["fit"] == settings)
     return (f"{r['median_s']:.0f} s for {r['models']} models (median of {r['runs']} runs: "
             f"{r['fits_s']:.0f} s of fits, "
-            f"{r['costs_s']:.0f} s of costs; load average {r['load_before']:.1f}–"
-            f"{r['load_after']:.1f})")
+            f"{r['costs_s']:.0f} s of costs; load average {r['load_before']:.1f} before, "
+            f"{r['load_after']:.1f} after)")
 
 
 def _fit_models() -> int:

@@ -401,6 +401,14 @@ class Compensation:
         """C, the colour that scales the lobe."""
         raise NotImplementedError
 
+    def value(self, inp, wi, wo, ms, data):
+        """f_ms·cos θ_o at (wi, wo), the colour included; ``ms`` = (g(ω_i),
+        G_avg, C) as :meth:`.mixture.Mixture.inputs` gives them. The separable
+        lobe (:func:`ms_lobe`) unless a model's compensation is shaped
+        otherwise (:class:`.directional.Directional`)."""
+        g_i, g_avg, colour = ms
+        return ms_lobe(colour, g_i, self.albedo(inp, wo, data), g_avg, mi.Frame3f.cos_theta(wo))
+
     def key(self) -> tuple:
         """What a traced call depends on beyond the plugin's own plan (a frozen
         function records again when it changes)."""

@@ -151,7 +151,7 @@ import mitsuba as mi
 import numpy as np
 
 from .._binding import create
-from . import compensation, fresnel, lambert, microfacet as mf, walk
+from . import compensation, directional, fresnel, lambert, microfacet as mf, walk
 from .base import BRDF, Effective, rgb_list, schlick
 from .cases import (THETAS_GRAZING, THETAS_LOW, Cases, Chi2, Furnace, Pictures, Twin, preserves,
                     rgb)
@@ -371,6 +371,7 @@ def walk_residual(distribution: str, geometry: str,
 # ``f0`` (``material`` stands for ``eta`` and ``kappa``).
 FRESNELS = ("schlick", "conductor", "dielectric", "f82")
 MULTIPLE_SCATTERING = ("none", "walk")
+COMPENSATIONS = ("directional", "separable")
 BASES = ("lambert", "plastic")
 FRESNEL_PARAMS = {"schlick": (), "conductor": ("eta", "kappa"),
                   "dielectric": ("int_ior", "ext_ior"), "f82": ("f82_tint",)}
@@ -465,6 +466,15 @@ class CookTorrance(BRDF):
                    'plugin\'s Fresnel form at every bounce. Needs ``geometry="smith"``, '
                    '``beckmann`` or ``ggx`` (isotropic or anisotropic), ``mode="hdr"``, '
                    '``base="lambert"``, no ``energy_compensation``.'),
+        Option("compensation", "directional", COMPENSATIONS,
+               doc='the lobe ``energy_compensation`` adds: ``"directional"`` (with '
+                   '``geometry="smith"``, ``beckmann`` or ``ggx``, isotropic ``alpha``) the '
+                   "random walk's bounces k >= 2 tabulated by pair of directions, with the "
+                   "height-correlated single scattering in place of G1·G1 "
+                   "(:mod:`mi_brdfs.bsdfs.directional`): the light where the walk puts it; "
+                   '``"separable"`` the separable lobe of Kulla & Conty 2017 '
+                   "(:mod:`mi_brdfs.bsdfs.compensation`), right in albedo only, which the "
+                   "other configurations get."),
     )
     PARAMS = (
         Param("diffuse_reflectance", 0.5, doc="m_D; above 1 allowed (scanline mode clamps)."),
@@ -544,6 +554,11 @@ class CookTorrance(BRDF):
                                "plastic substrate's colour; the lambert base has no substrate)")
         if self.options.multiple_scattering == "walk":
             self.check_walk(reader)
+        if "compensation" in props and self.options.compensation == "directional" \
+                and not self.directional_available():
+            raise reader.error("compensation", "directional",
+                               '"separable" unless geometry="smith", distribution "beckmann" or '
+                               '"ggx" and one alpha (the walk is tabulated by pair for these)')
         if "material" in props:
             self.read_material(reader)
         for name in ("int_ior", "ext_ior"):
@@ -569,6 +584,19 @@ class CookTorrance(BRDF):
                                    "transmittance is tabulated for one roughness, as "
                                    "roughplastic's)")
             self.update_plastic()
+
+    def directional_available(self) -> bool:
+        """True where the directional lobe is tabulated: Smith's G, Beckmann or
+        GGX, isotropic roughness."""
+        o = self.options
+        return o.geometry == "smith" and o.distribution in ("beckmann", "ggx") \
+            and not self.anisotropic
+
+    def directional(self) -> bool:
+        """True if the specular lobe is compensated by the directional lobe
+        (and its single scattering is then the height-correlated one)."""
+        return self.state.plan.lobes.multiple and getattr(self.state.compensation,
+                                                            "directional", False)
 
     def check_plastic(self, reader: Reader) -> None:
         """base="plastic": what roughplastic's base is made of, or one line saying why not."""
@@ -662,7 +690,8 @@ class CookTorrance(BRDF):
         return ([spec(d, g, f0) for d in mf.DISTRIBUTIONS for g in mf.GEOMETRIES
                  for f0 in (1.0, 0.0)] + [walk_spec(d) for d in ("ggx", "beckmann")]
                 + [spec(d, g, f0, True) for d in ("ggx", "beckmann") for g in mf.GEOMETRIES
-                   for f0 in (1.0, 0.0)] + [walk_spec(d, True) for d in ("ggx", "beckmann")])
+                   for f0 in (1.0, 0.0)] + [walk_spec(d, True) for d in ("ggx", "beckmann")]
+                + [directional.PairSpec(d) for d in ("ggx", "beckmann")])
 
     # --- lobes ---------------------------------------------------------------
     def has_diffuse(self) -> bool:
@@ -785,9 +814,15 @@ class CookTorrance(BRDF):
             (self.options.fresnel == "schlick" and self.state.f0 == "colour")
 
     def specular_lobe(self, inp, si, wo, h, D):
-        """m_S D F G / (4 cos θ_i) as a colour times a shape, with its ratio to the pdf."""
+        """m_S D F G / (4 cos θ_i) as a colour times a shape, with its ratio to the
+        pdf; with the directional compensation, G the height-correlated
+        1/(1 + Λ(ω_i) + Λ(ω_o)) (:func:`.walk.single`, the walk's first bounce)."""
         F = self.fresnel(inp, dot(si.wi, h))
         coloured = self.coloured()
+        if self.directional():
+            shape = walk.single(walk.surface(inp.microfacet), si.wi, wo,
+                                (lambda c: 1.0) if coloured else (lambda c: F))
+            return Scaled(inp.colour_s * F if coloured else inp.colour_s, shape, None)
         value, ratio = _specular(si.wi, wo, h, D, inp.microfacet, 1.0 if coloured else F,
                                  self.options.geometry)
         return Scaled(inp.colour_s * F if coloured else inp.colour_s, value, ratio)
@@ -875,6 +910,10 @@ class CookTorrance(BRDF):
         # the F0 axis: Schlick's f0, or the F0 equivalent to another form, computed
         # per lane (a source None: never contracted as a constant)
         f0 = "f0" if o.fresnel == "schlick" else None
+        if o.compensation == "directional" and self.directional_available():
+            return directional.Directional(
+                o.distribution, parameters=lambda inp: (inp.microfacet.alpha, inp.f0_walk),
+                sources=("alpha", f0), colour=lambda inp: inp.colour_s)
         if self.anisotropic:            # over (mu, phi, alpha_u, alpha_v, F0)
             return compensation.Tabulated(
                 walk_residual(o.distribution, o.geometry, True),

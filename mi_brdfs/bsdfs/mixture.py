@@ -37,7 +37,6 @@ from typing import Any, NamedTuple
 import drjit as dr
 import mitsuba as mi
 
-from .compensation import ms_lobe
 
 PDF_FLOOR = 1e-37                 # 1/pdf stays finite in float32 (the weight's scaling)
 WEIGHT_MAX = 1e12                 # sample weights above this are float32 failures (sample)
@@ -427,9 +426,7 @@ class Mixture:
                 p = mixed(p, p_s, self.pdf_specular(inp, si, wo))
         if use.multiple:                 # hdr only
             if value:
-                g_i, g_avg, colour = ms
-                g_o = self.state.compensation.albedo(inp, wo, self.m_ms)
-                f_ms = ms_lobe(colour, g_i, g_o, g_avg, mi.Frame3f.cos_theta(wo))
+                f_ms = self.state.compensation.value(inp, si.wi, wo, ms, self.m_ms)
                 values.append(weighted(f_ms, w_d if self.state.compensation.lobe == "diffuse"
                                        else w_s, False))
             if lobe_pdfs:

@@ -37,7 +37,7 @@ import drjit as dr
 import mitsuba as mi
 
 from .._jit import from_numpy
-from ..bsdfs import PLUGINS, compensation
+from ..bsdfs import PLUGINS, compensation, directional
 from ..bsdfs.grid import hemisphere_direction
 from . import groundtruth
 from .groundtruth import MU_MIN, WALK_SEED
@@ -103,6 +103,92 @@ def build(spec: compensation.AlbedoSpec, samples: int | None = None, batch: int 
             v[j] = v[last] + (j - last) * d1 + 0.5 * (j - last) ** 2 * d2
         values = np.clip(np.moveaxis(v, 0, k), 0.0, 1.0)
     return values
+
+
+# ----------------------------------------------------------------------------
+#  Building the directional tables (the walk's bounces k >= 2 by pair, JIT variants)
+# ----------------------------------------------------------------------------
+
+PAIR_SEED = 20261207      # of the directional tables' walks
+PAIR_F0S = ((0.0, 0.2, 0.4), (0.6, 0.8, 1.0))    # F0_AXIS's nodes, three per walk (a colour)
+
+
+def walk_pairs(distribution: str, alpha: float, wi: np.ndarray, wo: np.ndarray, paths: int,
+               seed: int = PAIR_SEED, batch: int = 1 << 22) -> np.ndarray:
+    """S = E[X + Y] of the walk's bounces k >= 2 at each pair (wi, wo) (N, 3),
+    X the next-event estimate from wi toward wo and Y from wo toward wi
+    (:func:`mi_brdfs.bsdfs.walk.scattered`), for each F0 of :data:`PAIR_F0S`
+    (shape (N, 6)), Schlick's F at every bounce; ``paths`` per pair and end,
+    the same random numbers for every F0 and, path by path, for every pair.
+    f_ms = S / (cos θ_i + cos θ_o)."""
+    from ..bsdfs import walk
+    from ..bsdfs.microfacet import Microfacet
+    s = walk.surface(Microfacet(distribution, mi.Float(max(alpha, 1e-4)), visible=True))
+    out = np.zeros((len(wi), 6))
+    step = max(1, batch // paths)
+    for start in range(0, len(wi), step):
+        stop = min(start + step, len(wi))
+        n = stop - start
+        lanes = lambda v: mi.Vector3f(*[from_numpy(mi.Float, np.repeat(v[start:stop, c], paths)
+                                                   .astype(np.float32)) for c in range(3)])
+        a, b = lanes(wi), lanes(wo)
+        path = dr.arange(mi.UInt32, n * paths) % paths
+        sums = []
+        for f0s in PAIR_F0S:
+            schlick = lambda c, f0s=f0s: mi.Color3f(
+                *[f + (1.0 - f) * dr.power(dr.fmax(1.0 - c, 0.0), 5) for f in f0s])
+            x = walk.scattered(s, a, b, schlick, mi.PCG32(n * paths, path, 2 * seed + 1))
+            y = walk.scattered(s, b, a, schlick, mi.PCG32(n * paths, path, 2 * seed + 3))
+            total = x + y
+            dr.eval(total)
+            sums.append(np.asarray(total).reshape(3, n, paths).mean(axis=-1).T)
+        out[start:stop] = np.concatenate(sums, axis=1)
+    return out
+
+
+def build_pairs(spec, paths: int | None = None, log=None) -> np.ndarray:
+    """S at every node of a :class:`mi_brdfs.bsdfs.directional.PairSpec`
+    (μ_i, μ_o, u, α, F0), symmetrised in (μ_i, μ_o). μ = 0 is walked at
+    ``MU_MIN``, α = 0 holds 0 (no bounce after the first)."""
+    paths = paths or spec.paths
+    mu_i, mu_o, u, alpha_axis, f0_axis = spec.axes
+    mi_, mo_, u_ = (g.ravel() for g in np.meshgrid(np.maximum(mu_i.nodes(), MU_MIN),
+                                                   np.maximum(mu_o.nodes(), MU_MIN), u.nodes(),
+                                                   indexing="ij"))
+    wi, wo = directional.pair_directions(mi_, mo_, directional.azimuth_at(mi_, mo_, u_))
+    out = np.zeros((mu_i.n, mu_o.n, u.n, alpha_axis.n, f0_axis.n))
+    for k, alpha in enumerate(alpha_axis.nodes()):
+        if alpha > 0.0:
+            s = walk_pairs(spec.distribution, float(alpha), wi, wo, paths)
+            out[:, :, :, k, :] = s.reshape(mu_i.n, mu_o.n, u.n, f0_axis.n)
+        if log:
+            log(f"  {spec.name}: alpha {alpha:.3g} walked")
+    return 0.5 * (out + out.transpose(1, 0, 2, 3, 4))
+
+
+def pair_albedo(spec, values: np.ndarray, n: int = 96) -> np.ndarray:
+    """The directional albedo of the interpolated pair table, ∫ f_ms cos θ_o dω_o,
+    at the nodes of :data:`mi_brdfs.bsdfs.directional.ALBEDO_AXES` (μ, α, F0):
+    a midpoint rule over cos θ_o (n) and the azimuth (2n over [0, π], the
+    table being even in it), the table looked up as the plugin does."""
+    table = directional.PairTable(values, spec)
+    mu_axis, alpha_axis, f0_axis = directional.ALBEDO_AXES
+    mo = (np.arange(n) + 0.5) / n
+    ph = (np.arange(2 * n) + 0.5) / (2 * n) * np.pi
+    out = np.zeros((mu_axis.n, alpha_axis.n, f0_axis.n))
+    weight = 2.0 * (1.0 / n) * (np.pi / (2 * n))       # dμ_o, dφ over [0, π] twice
+    for i, mu in enumerate(np.maximum(mu_axis.nodes(), MU_MIN)):
+        M, P = (g.ravel() for g in np.meshgrid(mo, ph, indexing="ij"))
+        wi, wo = directional.pair_directions(np.full_like(M, mu), M, P)
+        a = mi.Vector3f(*[from_numpy(mi.Float, wi[:, c].astype(np.float32)) for c in range(3)])
+        b = mi.Vector3f(*[from_numpy(mi.Float, wo[:, c].astype(np.float32)) for c in range(3)])
+        coords = table.coordinates((a, b))
+        scale = M / (mu + M)                    # f_ms cos θ_o = S cos θ_o / (μ_i + μ_o)
+        for j, alpha in enumerate(alpha_axis.nodes()):
+            for k, f0 in enumerate(f0_axis.nodes()):
+                s = np.asarray(table.grid(*coords, mi.Float(alpha), mi.Float(f0)))
+                out[i, j, k] = float(np.sum(s * scale) * weight)
+    return out
 
 
 def specs() -> list:
@@ -189,6 +275,29 @@ def check_walk(spec, paths: int, log) -> str:
             f"interpolation error along the roughness and F0 {worst:.1e} (where walked)")
 
 
+def check_pairs(spec, log, paths: int = 1 << 13) -> str:
+    """The Monte-Carlo noise of a directional table: its nodes at α 0.264 and
+    1.06 walked again with another seed and a quarter of the paths, the
+    largest difference relative to the node's largest value."""
+    shipped = compensation.shipped(spec)
+    mu_i, mu_o, u, alpha_axis, _ = spec.axes
+    mi_, mo_, u_ = (g.ravel() for g in np.meshgrid(np.maximum(mu_i.nodes(), MU_MIN),
+                                                   np.maximum(mu_o.nodes(), MU_MIN), u.nodes(),
+                                                   indexing="ij"))
+    wi, wo = directional.pair_directions(mi_, mo_, directional.azimuth_at(mi_, mo_, u_))
+    worst = []
+    for k in (4, 8):
+        alpha = float(alpha_axis.nodes()[k])
+        again = walk_pairs(spec.distribution, alpha, wi, wo, paths, seed=PAIR_SEED + 1)
+        again = 0.5 * (again.reshape(shipped.shape[:3] + (-1,))
+                       + again.reshape(shipped.shape[:3] + (-1,)).transpose(1, 0, 2, 3))
+        node = shipped[:, :, :, k, :]
+        worst.append(float(np.abs(again - node).max() / node.max()))
+        log(f"  {spec.name}: alpha {alpha:.3g} walked again")
+    return (f"{spec.name}: axes {'x'.join(str(a.n) for a in spec.axes)}; Monte-Carlo noise "
+            f"{max(worst):.1e} of the largest node ({paths} paths vs the shipped {spec.paths})")
+
+
 def main(argv: list[str] | None = None) -> int:
     """Rebuild the albedo tables, or (--check) measure their errors."""
     parser = argparse.ArgumentParser(prog="python -m mi_brdfs.tools.tables",
@@ -219,6 +328,16 @@ def main(argv: list[str] | None = None) -> int:
     for spec in chosen:
         start = time.perf_counter()
         walk = isinstance(spec, compensation.WalkSpec)
+        if isinstance(spec, directional.PairSpec):
+            if args.check:
+                print(check_pairs(spec, log) + f" [{time.perf_counter() - start:.0f} s]")
+                continue
+            out[spec.name] = build_pairs(spec, args.paths, log)
+            albedo = directional.PairAlbedoSpec(spec.distribution)
+            out[albedo.name] = pair_albedo(spec, out[spec.name])
+            log(f"{spec.name}: {out[spec.name].size} nodes x {args.paths or spec.paths} paths "
+                f"per end, and {albedo.name}, {time.perf_counter() - start:.1f} s")
+            continue
         if args.check and walk:
             print(check_walk(spec, max(1000, (args.paths or spec.paths) // 4), log)
                   + f" [{time.perf_counter() - start:.0f} s]")

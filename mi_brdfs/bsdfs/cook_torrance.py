@@ -58,7 +58,7 @@ variants) at the F0 whose Schlick curve has the form's hemispherical average
 F_avg = 2∫F(μ)μ dμ (Kulla & Conty 2017's F_avg;
 :func:`mi_brdfs.bsdfs.fresnel.schlick_equivalent`). Against the walk with the
 form's own F at every bounce (Heitz et al. 2016), gold, copper and aluminium
-are within 2 %, the white conductor within 0.3 %; F82 with tints far below 1
+are within 2.8 %, the white conductor within 0.9 %; F82 with tints far below 1
 is not (see the limitations page). With ``base="plastic"`` it is refused.
 
 **Base** (``base``): the lecture's diffuse lobe is ``"lambert"`` (the
@@ -86,7 +86,15 @@ the pdf within 0.006. It needs ``geometry="smith"``,
 ``beckmann`` or ``ggx``, one constant isotropic ``alpha`` and ``mode="hdr"``,
 as ``roughplastic``; the table is not differentiated (as there).
 
-**Energy compensation** (``energy_compensation``): the reciprocal
+**Energy compensation** (``energy_compensation``), with Smith's G, GGX or
+Beckmann and one ``alpha``: the **directional** lobe (``compensation``, the
+default; :mod:`mi_brdfs.bsdfs.directional`), the random walk's bounces k >= 2
+(Heitz, Hanika, d'Eon & Dachsbacher 2016) tabulated by pair of directions
+over (cos θ_i, cos θ_o, the half vector's place between the mirror azimuth and
+retro-reflection, α up to 2, F0), and the height-correlated single
+scattering (Heitz 2014) in place of G1·G1: the light goes where the walk puts
+it, reciprocal per evaluation. Otherwise (``compensation="separable"``, the
+V-cavity, Blinn's D, ``alpha_u``/``alpha_v``): the reciprocal
 multiple-scattering lobe of Kulla & Conty 2017 / Turquin 2019
 (:mod:`mi_brdfs.bsdfs.compensation`) whose albedo is what single scattering misses
 of the random walk on the Smith microsurface (Heitz, Hanika, d'Eon &
@@ -592,6 +600,15 @@ class CookTorrance(BRDF):
         return o.geometry == "smith" and o.distribution in ("beckmann", "ggx") \
             and not self.anisotropic
 
+    def uses_directional(self) -> bool:
+        """The directional lobe is asked for and tabulated here, and the
+        roughness is not one value beyond its table's end (``ALPHA_END``, 2:
+        the separable lobe, exact in albedo to α = ∞, then takes over)."""
+        if self.options.compensation != "directional" or not self.directional_available():
+            return False
+        return not (self.uniform("alpha")
+                    and value_range(self.m_alpha)[0] > directional.ALPHA_END)
+
     def directional(self) -> bool:
         """True if the specular lobe is compensated by the directional lobe
         (and its single scattering is then the height-correlated one)."""
@@ -910,7 +927,7 @@ class CookTorrance(BRDF):
         # the F0 axis: Schlick's f0, or the F0 equivalent to another form, computed
         # per lane (a source None: never contracted as a constant)
         f0 = "f0" if o.fresnel == "schlick" else None
-        if o.compensation == "directional" and self.directional_available():
+        if self.uses_directional():
             return directional.Directional(
                 o.distribution, parameters=lambda inp: (inp.microfacet.alpha, inp.f0_walk),
                 sources=("alpha", f0), colour=lambda inp: inp.colour_s)

@@ -56,7 +56,11 @@ ends (:func:`.walk.scattered`, ``PAIR_PATHS`` paths, every F0 node on the same
 paths), Schlick's F at every bounce. Its F0 is read as the separable lobe's
 is: per colour channel, at Schlick's F0 of the same hemispherical average
 F_avg for another Fresnel form (:func:`.fresnel.schlick_equivalent`). Beyond
-``ALPHA_END`` the table holds α = ``ALPHA_END`` (see the limitations page).
+``ALPHA_END`` the table would hold α = ``ALPHA_END`` and lose light (a
+white GGX α 3 reflects 0.78-0.96): a plugin whose roughness is one value
+above it takes the separable lobe instead (``cook_torrance``'s
+``uses_directional``), which is exact in albedo to α = ∞; a textured or
+differentiated roughness beyond it keeps the held table.
 
 **Sampled** as the separable lobe is: picked in proportion to its directional
 albedo (the table ``directional/<D>/albedo``, the cosine-weighted integral of
@@ -186,7 +190,10 @@ class PairTable(Table):
 
     def __init__(self, values: np.ndarray, spec: PairSpec):
         self.axes, self.directions, self.specs = PAIR_AXES, 3, (spec,)
-        self.grid = Grid(self.axes, values, bounds=(0.0, None))
+        # Not clipped at 0 (as the separable tables' coefficients are): near F0 = 0,
+        # where S grows as F0², clipped coefficients lift the spline off its nodes
+        # (9e-4 of white at GGX α 0.3, F0 0); the lookup is clamped at 0 instead.
+        self.grid = Grid(self.axes, values)
         # (no average: the lobe is normalised by its table, not by G_avg)
         self.average_grid = Grid(self.axes[3:], np.zeros(tuple(a.n for a in self.axes[3:])))
 
@@ -236,11 +243,13 @@ class Directional(Compensation):
         table = self.specialised[0]
         cos_i, cos_o = dr.fmax(wi.z, 0.0), dr.fmax(wo.z, 0.0)
         scale = cos_o / dr.fmax(cos_i + cos_o, 1e-30)
-        shape = per_channel(lambda p: table((wi, wo), p, data["pairs"]), self.parameters(inp))
+        shape = per_channel(lambda p: dr.fmax(table((wi, wo), p, data["pairs"]), 0.0),
+                            self.parameters(inp))
         return ms[2] * (shape * scale)
 
     def key(self) -> tuple:
-        return tuple(self.specialised[0].fixed) if self.specialised is not None else ()
+        return ("directional",) + (tuple(self.specialised[0].fixed)
+                                   if self.specialised is not None else ())
 
 
 _cache: dict = {}

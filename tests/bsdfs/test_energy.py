@@ -254,7 +254,7 @@ def test_compensated_conductor_matches_the_walk(distribution, alpha):
 
 @pytest.mark.parametrize("distribution", ["ggx", "beckmann"])
 @pytest.mark.parametrize("name, bound", [("Au", 0.03), ("Cu", 0.03), ("Al", 0.03),
-                                         ("F82 mild", 0.035), ("dielectric 1.5", 0.03),
+                                         ("F82 mild", 0.04), ("dielectric 1.5", 0.03),
                                          ("white", 0.01)])
 def test_compensation_with_every_fresnel_form_matches_its_walk(distribution, name, bound):
     """Compensated with the exact conductor (Mitsuba's Au, Cu, Al as the RGB
@@ -263,8 +263,8 @@ def test_compensation_with_every_fresnel_form_matches_its_walk(distribution, nam
     (walk_reference_fresnel.json), per colour channel, from 0° to 85°, α 0.1 to
     1: within 3 % (the walk tables read at the F0 of the Schlick curve of the
     same hemispherical average), the white conductor (F = 1) within 1 %;
-    F82-tint with a tint of (1, 0.9, 0.8) within 3.5 % (measured 3.0 % at α 0.2,
-    80°). An F82 whose tint dips to 0.2 is not (25 % at α 0.1, 85°): the walk's
+    F82-tint with a tint of (1, 0.9, 0.8) within 4 % (measured 3.9 % at α 0.2,
+    80°, Beckmann). An F82 whose tint dips to 0.2 is not (28 % at α 0.1, 85°): the walk's
     grazing bounces see the dip, the average does not. python -m
     mi_brdfs.tools.groundtruth --reference tests/bsdfs/walk_reference_fresnel.json
     --residuals prints every figure."""
@@ -464,9 +464,14 @@ def roughness_derivative(config: dict, key: str, alpha: float, wi, wo,
     return np.array(dr.grad(value))[0]
 
 
+SEPARABLE = {"compensation": "separable"}     # cook_torrance's separable lobe (the smooth truth's)
+
+
 @pytest.mark.parametrize("config, key, alpha, textured", [
-    (cook_torrance("ggx"), "alpha", 0.15, False), (cook_torrance("ggx"), "alpha", 0.6, False),
-    (cook_torrance("ggx"), "alpha", 0.15, True), (cook_torrance("beckmann"), "alpha", 0.3, False),
+    (cook_torrance("ggx", **SEPARABLE), "alpha", 0.15, False),
+    (cook_torrance("ggx", **SEPARABLE), "alpha", 0.6, False),
+    (cook_torrance("ggx", **SEPARABLE), "alpha", 0.15, True),
+    (cook_torrance("beckmann", **SEPARABLE), "alpha", 0.3, False),
     ({"type": "ward", "diffuse_reflectance": 0.0, "specular_reflectance": 1.0,
       "energy_compensation": True}, "alpha", 0.3, False)],
     ids=["ggx-0.15", "ggx-0.6", "ggx-0.15-textured", "beckmann-0.3", "ward-0.3"])
@@ -486,7 +491,8 @@ def test_roughness_derivative_matches_the_smooth_truth(config, key, alpha, textu
 
 
 @pytest.mark.parametrize("config, axis, textured", [
-    (cook_torrance("ggx"), "alpha", False), (cook_torrance("ggx"), "alpha", True),
+    (cook_torrance("ggx", **SEPARABLE), "alpha", False),
+    (cook_torrance("ggx", **SEPARABLE), "alpha", True),
     ({"type": "ward", "diffuse_reflectance": 0.0, "specular_reflectance": 1.0,
       "energy_compensation": True}, "alpha", False),
     (cook_torrance("beckmann", alpha_u=0.3, alpha_v=0.3), "alpha_u", False),
@@ -504,6 +510,33 @@ def test_roughness_derivative_is_continuous_at_the_nodes(config, axis, textured)
     above = roughness_derivative(config, axis, node * (1 + 1e-4), wi, wo, textured)
     assert np.abs(above - below).max() <= 2e-3 * np.abs(above).max()
     assert BY_NAME[config["type"]].compensable
+
+
+@pytest.mark.parametrize("distribution, textured", [("ggx", False), ("beckmann", False),
+                                                     ("ggx", True)])
+def test_directional_roughness_derivative(distribution, textured):
+    """The directional lobe (the default with Smith's G): d eval / d alpha by
+    AD equals a central difference of eval (within 2 % per pair where the
+    derivative is not ~0), at a roughness between the table's nodes and just
+    below and above one (the B-spline along α: no jump at the node)."""
+    from mi_brdfs.bsdfs.directional import ALPHA_AXIS
+    config = cook_torrance(distribution, f0=0.7)
+    wi, wo = direction_pairs()
+
+    def value(alpha):
+        bsdf = mi.load_dict({**config, "alpha": alpha})
+        return np.array(bsdf.eval(mi.BSDFContext(), surface(wi), vec(wo)))[0]
+
+    for alpha in (0.37, 0.8):
+        h = 1e-3 * alpha
+        fd = (value(alpha + h) - value(alpha - h)) / (2 * h)
+        ad = roughness_derivative(config, "alpha", alpha, wi, wo, textured)
+        assert np.all(np.abs(ad - fd) <= 0.02 * np.abs(fd) + 0.01 * np.abs(fd).max()), \
+            (alpha, (np.abs(ad - fd) / np.abs(fd)).max())
+    node = float(ALPHA_AXIS.nodes()[5])
+    below = roughness_derivative(config, "alpha", node * (1 - 1e-4), wi, wo, textured)
+    above = roughness_derivative(config, "alpha", node * (1 + 1e-4), wi, wo, textured)
+    assert np.abs(above - below).max() <= 2e-3 * np.abs(above).max()
 
 
 # ----------------------------------------------------------------------------

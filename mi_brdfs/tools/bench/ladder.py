@@ -6,12 +6,16 @@ rendered on the same spheres under the same lights (the bench group
 The rungs (:data:`RUNGS`), each a set of options of the plugin:
 
 - ``single``: the microfacet model's single scattering, no compensation;
-- ``separable``: ``energy_compensation``, the separable lobe g(ω_i) g(ω_o) that
-  adds what single scattering misses of the walk's albedo;
+- ``separable``: ``energy_compensation`` with ``compensation="separable"``, the
+  separable lobe g(ω_i) g(ω_o) that adds what single scattering misses of the
+  walk's albedo;
+- ``directional``: ``energy_compensation`` (its default lobe), the walk's
+  bounces k >= 2 tabulated by pair of directions beside the height-correlated
+  single scattering (:mod:`mi_brdfs.bsdfs.directional`);
 - ``walk``: ``multiple_scattering="walk"``, the random walk on the Smith
   microsurface evaluated and sampled in the renderer: the truth, noisy.
 
-A new rung (a directional compensation) is one more entry in :data:`RUNGS`.
+A new rung is one more entry in :data:`RUNGS`.
 The materials (:data:`MATERIALS`) are a rough gold and a rough white
 conductor; the lightings (:data:`LIGHTINGS`) the fit's environment map
 (:func:`..fit.scene.sky`), a directional light from behind the sphere, which
@@ -47,7 +51,8 @@ BASE = {"type": "cook_torrance", "distribution": "ggx", "geometry": "smith", "k"
 
 RUNGS: list[tuple[str, dict]] = [            # name, the options that make the rung
     ("single", {}),
-    ("separable", {"energy_compensation": True}),
+    ("separable", {"energy_compensation": True, "compensation": "separable"}),
+    ("directional", {"energy_compensation": True}),
     ("walk", {"multiple_scattering": "walk"}),
 ]
 TRUTH = "walk"                                # the rung the converged reference renders

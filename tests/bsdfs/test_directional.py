@@ -89,7 +89,8 @@ def single(distribution, wi, wo, alpha, f0, separable=False):
     1/(1 + Λ_i + Λ_o), or G1·G1 (``separable``, roughconductor's)."""
     h = wi + wo
     h /= np.linalg.norm(h, axis=1, keepdims=True)
-    li, lo = smith_lambda(distribution, wi[:, 2], alpha), smith_lambda(distribution, wo[:, 2], alpha)
+    li = smith_lambda(distribution, wi[:, 2], alpha)
+    lo = smith_lambda(distribution, wo[:, 2], alpha)
     g = 1.0 / ((1.0 + li) * (1.0 + lo)) if separable else 1.0 / (1.0 + li + lo)
     f = f0 + (1.0 - f0) * (1.0 - np.sum(wi * h, axis=1)) ** 5
     return f * normals(distribution, h[:, 2], alpha) * g / (4.0 * wi[:, 2])

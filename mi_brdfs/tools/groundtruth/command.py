@@ -51,9 +51,9 @@ def _parser() -> argparse.ArgumentParser:
                         help="print what single scattering misses: the separable E_ss, the "
                              "height-correlated first bounce E_1 and the bounces k >= 2")
     parser.add_argument("--grazing", action="store_true",
-                        help="print what compensation adds at grazing pairs (retro-reflection, "
-                             "side-on, mirror) against the walk's multiple scattering there "
-                             "(Beckmann x Smith, alpha 0.3, F0 1 and 0.7)")
+                        help="print what the separable compensation lobe adds at grazing pairs "
+                             "(retro-reflection, side-on, mirror) against the walk's multiple "
+                             "scattering there (Beckmann x Smith, alpha 0.3, F0 1 and 0.7)")
     parser.add_argument("--anisotropic", action="store_true",
                         help="print the walk's albedo for anisotropic roughness "
                              f"(alpha_x, alpha_y) in {list(ANISOTROPIC)}, F0 1 and 0.5, "
@@ -91,9 +91,9 @@ def print_slices() -> None:
 
 
 def print_grazing(paths: int) -> None:
-    print(f"cook_torrance beckmann/smith, alpha 0.3: f (1/sr) that energy compensation adds, "
-          f"against the walk's multiple scattering (bounces >= 2, +- standard error, {paths} "
-          "paths)")
+    print("cook_torrance beckmann/smith, alpha 0.3: f (1/sr) that the separable compensation "
+          "lobe adds, against the walk's multiple scattering (bounces >= 2, +- standard error, "
+          f"{paths} paths)")
     for f0 in (1.0, 0.7):
         for r in grazing_difference("beckmann", 0.3, f0, paths):
             where = f"{r['pair']} {r['theta_i']}/{r['theta_o']} deg" + (

@@ -16,7 +16,8 @@ of GGX and Beckmann, eq. 99's height-correlated G2), not the package's:
   k >= 2 has none (< 1e-4 of its largest at that distribution, α and F0) the
   plugin's k >= 2 (its eval less the transcribed single scattering) is below
   1e-2 of that largest; where the walk has some (>= 1e-2 of it) the plugin
-  gives at least half. The separable lobe breaks this rule (which is why the
+  gives at least half, and at most twice (failing at the grazing mirror
+  pair: OVER). The separable lobe breaks this rule (which is why the
   directional lobe exists): pinned below;
 - the L1 over the hemisphere of pairs, cosine-weighted, of the plugin
   against the walk: the stored figures (the Dr.Jit walk's quadrature, see
@@ -138,12 +139,14 @@ def grazing_rule(distribution, alpha, compensation):
     """The rule at the grazing pairs, both orders, per F0: (the plugin's
     largest k >= 2 where the walk has none, over the walk's largest; the least
     plugin / walk where it has some, the walk lowered by 3 of its standard
-    errors; the walk's largest relative standard error there)."""
+    errors; the largest, the walk raised by 3; the walk's largest relative
+    standard error there)."""
     wi, wo = pair_vectors(PAIRS[GRAZING])
     walk = stored(distribution, alpha, "multiple")[GRAZING] / wo[:, 2:]       # f, reciprocal
     error = stored(distribution, alpha, "error")[GRAZING] / wo[:, 2:]
     top = walk.max(axis=0)
     none, some, spread = np.zeros(len(REF["f0"])), np.full(len(REF["f0"]), np.inf), 0.0
+    most = np.zeros(len(REF["f0"]))
     for j, f0 in enumerate(REF["f0"]):
         bsdf = plugin(distribution, alpha, f0, compensation)
         for x, y in ((wi, wo), (wo, wi)):
@@ -151,10 +154,11 @@ def grazing_rule(distribution, alpha, compensation):
                                                      compensation == "separable")) / y[:, 2]
             nil, has = walk[:, j] < NONE * top[j], walk[:, j] >= SOME * top[j]
             none[j] = max(none[j], np.abs(ms[nil]).max(initial=0.0) / top[j])
-            low = walk[has, j] - 3.0 * error[has, j]
+            low, high = walk[has, j] - 3.0 * error[has, j], walk[has, j] + 3.0 * error[has, j]
             some[j] = min(some[j], (ms[has] / low).min(initial=np.inf))
+            most[j] = max(most[j], (ms[has] / high).max(initial=0.0))
             spread = max(spread, (error[has, j] / walk[has, j]).max(initial=0.0))
-    return none, some, spread
+    return none, some, most, spread
 
 
 # Measured (python -m mi_brdfs.tools.groundtruth --reference
@@ -179,10 +183,34 @@ def test_grazing_pairs_follow_the_walk(distribution, alpha):
     """(Where the walk has some its standard error is below a fifth of it, and
     the half asked is of the walk less 3 standard errors: the walk's noise is
     not taken for the plugin's error.)"""
-    none, some, spread = grazing_rule(distribution, alpha, "directional")
+    none, some, _, spread = grazing_rule(distribution, alpha, "directional")
     assert np.all(none < SOME), none
     assert np.all(some >= HALF), some
     assert spread < 0.2
+
+
+# Measured likewise: near the exact grazing mirror pair (Δφ 180°, both angles >= 80°)
+# the plugin's k >= 2 is far above the walk's at every α from 0.1 to 1 (GGX) or 2
+# (Beckmann): 87°/87°, F0 1, α 0.3: 12.1 sr⁻¹ (GGX) and 49 (Beckmann) for the walk's
+# 0.28 and 1.05; at Δφ 178° it is close (0.076 for 0.073, 0.24 for 0.18): the
+# table's u = 0 column. There S at (cos θ 0.0625, u 0, α 0.264, F0 1) is 0.284
+# stored and 5.9 interpolated: the α axis' interpolating B-spline rings where S
+# spans decades over its nodes (cos θ 0.0278, u 0: 2962 at α 0.017, 42.6 at 0.066,
+# 0.95 at 0.149), its negative coefficients clipped to 0 (Grid's bounds). Beckmann α 1 and 2 also at
+# side-on pairs (60°/80°, 75°/87°: the cliff of BROKEN).
+OVER = {("ggx", 0.1), ("ggx", 0.3), ("ggx", 0.6), ("ggx", 1.0), ("beckmann", 0.1),
+        ("beckmann", 0.3), ("beckmann", 0.6), ("beckmann", 1.0), ("beckmann", 2.0)}
+
+
+@pytest.mark.parametrize("distribution, alpha", [
+    pytest.param(*c, marks=pytest.mark.xfail(strict=True, reason="the grazing mirror pair, "
+                                             "see OVER")) if c in OVER else c
+    for c in CASES])
+def test_grazing_pairs_at_most_twice_the_walk(distribution, alpha):
+    """Where the walk has some k >= 2, the plugin gives at most twice it (the
+    walk raised by 3 standard errors)."""
+    _, _, most, _ = grazing_rule(distribution, alpha, "directional")
+    assert np.all(most <= 1.0 / HALF), most
 
 
 @pytest.mark.parametrize("distribution, alpha", [c for c in CASES if c not in SEPARABLE_KEEPS])
@@ -192,7 +220,7 @@ def test_the_separable_lobe_breaks_the_grazing_rule(distribution, alpha):
     scattering) lights grazing pairs where the walk has nothing (Beckmann,
     retro-reflection and side on) or gives less than half of what the walk
     has near the grazing mirror pair."""
-    none, some, _ = grazing_rule(distribution, alpha, "separable")
+    none, some, _, _ = grazing_rule(distribution, alpha, "separable")
     assert np.any(none >= SOME) or np.any(some < HALF), (none, some)
 
 
@@ -286,10 +314,11 @@ def test_the_command_prints_the_residual_table(capsys):
     for (distribution, alpha), r in zip(CASES, rows):
         l1 = REF["l1"][distribution][REF["alpha"].index(alpha)]
         assert float(r[3]) == pytest.approx(100 * max(l1["directional"]), abs=0.006)
-        assert float(r[8]) == pytest.approx(100 * max(l1["separable"]), abs=0.006)
-        none, some, _ = grazing_rule(distribution, alpha, "directional")
+        assert float(r[9]) == pytest.approx(100 * max(l1["separable"]), abs=0.006)
+        none, some, most, _ = grazing_rule(distribution, alpha, "directional")
         assert float(r[5]) == pytest.approx(none.max(), rel=0.06, abs=1e-6)
         assert float(r[6]) == pytest.approx(some.min(), abs=0.006)
+        assert float(r[7]) == pytest.approx(most.max(), rel=0.01)
 
 
 def test_agreement_refuses_the_pair_reference(capsys):

@@ -201,22 +201,27 @@ def grazing_rule(ref: dict, distribution: str, a: int, compensation: str) -> dic
     (< NONE of its largest), over the walk's largest ("none", the test's
     bound: SOME), and the least ratio plugin / walk where the walk has some
     (>= SOME of its largest; the walk less 3 of its standard errors; "some",
-    the test's bound: 0.5)."""
+    the test's bound: 0.5), and the largest there (the walk plus 3 standard
+    errors; "most", the test's bound: 2)."""
     pairs = np.array(ref["pairs"], dtype=np.float64)
     grazing = pairs[:, :2].max(axis=1) >= GRAZING
     wi, wo = pair_vectors(pairs[grazing])
     walk_value = np.array(ref[distribution]["multiple"][a])[grazing] / wo[:, 2:]   # f
-    low = walk_value - 3.0 * np.array(ref[distribution]["error"][a])[grazing] / wo[:, 2:]
+    error = np.array(ref[distribution]["error"][a])[grazing] / wo[:, 2:]
+    low, high = walk_value - 3.0 * error, walk_value + 3.0 * error
     alpha = ref["alpha"][a]
     top = walk_value.max(axis=0)
-    none = some = None
+    none = some = most = None
     for x, y in ((wi, wo), (wo, wi)):                  # f is reciprocal: both orders
         f = plugin_multiple(distribution, alpha, compensation, x, y) / y[:, 2:]
         n = np.where(walk_value < NONE * top, np.abs(f), 0.0).max(axis=0) / top
-        ratio = np.where(walk_value >= SOME * top, f / np.maximum(low, 1e-300), np.inf)
+        has = walk_value >= SOME * top
+        ratio = np.where(has, f / np.maximum(low, 1e-300), np.inf)
+        above = np.where(has, f / np.maximum(high, 1e-300), 0.0).max(axis=0)
+        most = above if most is None else np.maximum(most, above)
         none = n if none is None else np.maximum(none, n)
         some = ratio.min(axis=0) if some is None else np.minimum(some, ratio.min(axis=0))
-    return {"none": none.tolist(), "some": some.tolist()}
+    return {"none": none.tolist(), "some": some.tolist(), "most": most.tolist()}
 
 
 def print_directional_residuals(ref: dict) -> None:
@@ -228,9 +233,10 @@ def print_directional_residuals(ref: dict) -> None:
           "noise). Grazing pairs (either angle >= 75 deg): 'none' the plugin's k >= 2 where "
           f"the walk's is < {NONE:g} of its largest, over that largest (bound {SOME:g}); "
           f"'some' the least plugin / (walk - 3 standard errors) where the walk's is >= "
-          f"{SOME:g} of its largest (bound 0.5)")
-    print("D         alpha | directional: L1      none    some | separable: L1       none    "
-          "some | L1 noise")
+          f"{SOME:g} of its largest (bound 0.5), 'most' the largest plugin / (walk + 3 standard "
+          "errors) there (bound 2)")
+    print("D         alpha | directional: L1      none  some   most | separable: L1       none  "
+          "some   most | L1 noise")
     for distribution in DISTRIBUTIONS:
         for a, alpha in enumerate(ref["alpha"]):
             l1 = ref["l1"][distribution][a]
@@ -238,6 +244,6 @@ def print_directional_residuals(ref: dict) -> None:
             for c in COMPENSATIONS:
                 g = grazing_rule(ref, distribution, a, c)
                 cells.append(f"{100 * max(l1[c]):6.2f} % {max(g['none']):8.2g} "
-                             f"{min(g['some']):6.2f}")
+                             f"{min(g['some']):5.2f} {max(g['most']):6.3g}")
             print(f"{distribution:9} {alpha:5g} |    {cells[0]} |  {cells[1]} | "
                   f"{100 * max(l1['noise']):.2f} %")

@@ -13,11 +13,16 @@ Beckmann, isotropic or anisotropic, with Schlick's Fresnel at every bounce.
   (``tests/bsdfs/walk_reference.json``; for anisotropic roughness
   ``tests/bsdfs/walk_reference_anisotropic.json``), the compensated plugins' residuals,
   BRDF slices, the validation report's section (:func:`report_section`);
+- :mod:`.pairs`: the walk's BRDF at pairs of directions against
+  ``cook_torrance``'s directional lobe (``tests/bsdfs/walk_reference_directional.json``:
+  the walk at grazing pairs and the L1 over the hemisphere of pairs);
 - :mod:`.command`: the command line::
 
     python -m mi_brdfs.tools.groundtruth -o tests/bsdfs/walk_reference.json   # reference albedos
     python -m mi_brdfs.tools.groundtruth --roughness anisotropic \
         -o tests/bsdfs/walk_reference_anisotropic.json                     # (theta, phi, alpha_u, alpha_v, F0)
+    python -m mi_brdfs.tools.groundtruth --directional \
+        -o tests/bsdfs/walk_reference_directional.json                     # the BRDF at pairs (.pairs)
     python -m mi_brdfs.tools.groundtruth --reference FILE --residuals  # compensation vs the walk
     python -m mi_brdfs.tools.groundtruth --reference FILE --agreement  # FILE vs a new walk
     python -m mi_brdfs.tools.groundtruth --slices          # BRDF slices vs the walk

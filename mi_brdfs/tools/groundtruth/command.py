@@ -11,6 +11,7 @@ import numpy as np
 
 from ..destinations import OutputError, check_output_file
 from .microsurface import DISTRIBUTIONS, Alpha
+from .pairs import directional_reference, print_directional_residuals
 from .report import (compensated_albedo, fresnel_reference, grazing_difference, reference,
                      reference_agreement, residuals_fresnel,
                      reference_anisotropic, residuals, residuals_anisotropic, slice_difference)
@@ -30,6 +31,12 @@ def _parser() -> argparse.ArgumentParser:
                         help="-o writes instead the walk's albedos with cook_torrance's other "
                              "Fresnel forms at every bounce (Au, Cu, Al, F82, a dielectric, "
                              "white) over (theta, alpha, channel)")
+    parser.add_argument("--directional", action="store_true",
+                        help="-o writes instead the walk's BRDF at pairs of directions "
+                             "(closed-form first bounce, bounces k >= 2 and their standard "
+                             "error) and the hemisphere's L1 of cook_torrance's directional "
+                             "and separable lobes against the walk (the reference of "
+                             "tests/bsdfs/test_directional.py)")
     parser.add_argument("--reference", help="read them from here (instead of walking); "
                                             "either kind")
     parser.add_argument("--paths", type=int, default=100_000, help="paths per point")
@@ -44,9 +51,9 @@ def _parser() -> argparse.ArgumentParser:
                         help="print what single scattering misses: the separable E_ss, the "
                              "height-correlated first bounce E_1 and the bounces k >= 2")
     parser.add_argument("--grazing", action="store_true",
-                        help="print what compensation adds at grazing pairs (retro-reflection, "
-                             "side-on, mirror) against the walk's multiple scattering there "
-                             "(Beckmann x Smith, alpha 0.3, F0 1 and 0.7)")
+                        help="print what the separable compensation lobe adds at grazing pairs "
+                             "(retro-reflection, side-on, mirror) against the walk's multiple "
+                             "scattering there (Beckmann x Smith, alpha 0.3, F0 1 and 0.7)")
     parser.add_argument("--anisotropic", action="store_true",
                         help="print the walk's albedo for anisotropic roughness "
                              f"(alpha_x, alpha_y) in {list(ANISOTROPIC)}, F0 1 and 0.5, "
@@ -84,9 +91,9 @@ def print_slices() -> None:
 
 
 def print_grazing(paths: int) -> None:
-    print(f"cook_torrance beckmann/smith, alpha 0.3: f (1/sr) that energy compensation adds, "
-          f"against the walk's multiple scattering (bounces >= 2, +- standard error, {paths} "
-          "paths)")
+    print("cook_torrance beckmann/smith, alpha 0.3: f (1/sr) that the separable compensation "
+          "lobe adds, against the walk's multiple scattering (bounces >= 2, +- standard error, "
+          f"{paths} paths)")
     for f0 in (1.0, 0.7):
         for r in grazing_difference("beckmann", 0.3, f0, paths):
             where = f"{r['pair']} {r['theta_i']}/{r['theta_o']} deg" + (
@@ -110,6 +117,9 @@ def print_anisotropic(paths: int) -> None:
 
 
 def print_residuals(ref: dict) -> None:
+    if "pairs" in ref:                               # the walk at pairs of directions
+        print_directional_residuals(ref)
+        return
     if "forms" in ref:                               # the other Fresnel forms
         print("compensated cook_torrance (Smith G, k 0, m_S 1) against the walk with the same "
               f"Fresnel at every bounce, alpha in {ref['alpha']}, theta in {ref['theta']} deg, "
@@ -166,8 +176,9 @@ def main(argv: list[str] | None = None) -> int:
         except (OSError, ValueError) as error:
             parser.error(f"--reference {args.reference}: cannot read it "
                          f"({getattr(error, 'strerror', None) or error})")
-        if args.agreement and "phi" in ref:
-            parser.error(f"--agreement: {args.reference} holds anisotropic reference albedos; "
+        if args.agreement and ("phi" in ref or "pairs" in ref):
+            kind = "the walk's BRDF at pairs" if "pairs" in ref else "anisotropic reference albedos"
+            parser.error(f"--agreement: {args.reference} holds {kind}; "
                          "--agreement compares isotropic ones")
     if args.output:
         try:
@@ -191,7 +202,8 @@ def main(argv: list[str] | None = None) -> int:
     if not (args.output or args.residuals):
         return 0
     if ref is None:
-        make = fresnel_reference if args.fresnel_forms else \
+        make = directional_reference if args.directional else \
+            fresnel_reference if args.fresnel_forms else \
             reference_anisotropic if args.roughness == "anisotropic" else reference
         ref = make(args.paths, log)
     if args.output:

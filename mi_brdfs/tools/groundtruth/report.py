@@ -502,13 +502,13 @@ GRAZING_PAIRS = (        # (name, θ_i, θ_o, φ_o - φ_i in degrees): both dire
 
 def grazing_difference(distribution: str = "beckmann", alpha: float = 0.3, f0: float = 1.0,
                        paths: int = 200_000) -> list[dict]:
-    """Where the separable compensation lobe (``compensation="separable"``) puts the light of grazing directions,
-    against the walk: at each of :data:`GRAZING_PAIRS`, the BRDF f (eval / cos
-    θ_o) that compensation adds to cook_torrance with Smith's G (k = 0, white
-    m_S) and the walk's multiple scattering there (bounces >= 2, next-event
-    estimation, with its standard error). The lobe, separable in θ_i and θ_o,
-    adds the same at every azimuth; the walk's is concentrated near the
-    mirror direction."""
+    """Where the separable compensation lobe (``compensation="separable"``)
+    puts the light of grazing directions, against the walk: at each of
+    :data:`GRAZING_PAIRS`, the BRDF f (eval / cos θ_o) that compensation adds
+    to cook_torrance with Smith's G (k = 0, white m_S) and the walk's multiple
+    scattering there (bounces >= 2, next-event estimation, with its standard
+    error). The lobe, separable in θ_i and θ_o, adds the same at every
+    azimuth; the walk's is concentrated near the mirror direction."""
     def direction(theta, phi):
         t, p = math.radians(theta), math.radians(phi)
         return [math.sin(t) * math.cos(p), math.sin(t) * math.sin(p), math.cos(t)]
@@ -516,6 +516,7 @@ def grazing_difference(distribution: str = "beckmann", alpha: float = 0.3, f0: f
     wo = np.array([direction(to, dphi) for _, _, to, dphi in GRAZING_PAIRS])
     config = {"type": "cook_torrance", "distribution": distribution, "geometry": "smith",
               "alpha": alpha, "k": 0.0, "f0": f0, "specular_reflectance": 1.0}
+    # the separable lobe (the directional one, the default here, is measured by .pairs)
     plugins = [mi.load_dict({**config, "energy_compensation": True,
                              "compensation": "separable"}), mi.load_dict(config)]
     comp, single = ([eval_at_viewer(bsdf, ti, wo[k:k + 1], phi_i_deg=0.0)[0, 0]

@@ -785,6 +785,9 @@ class CookTorrance(BRDF):
             value = type(value)(value)
             dr.make_opaque(value)                  # one kernel for every index
             self.m_f0_walk, self.state.f0_walk = value, True    # traversed: frozen functions
+            if self.directional():                 # its F0 now a constant colour: contracted
+                self.state.compensation = self.compensation()
+                self.m_ms = self.state.compensation.prepare(self)
 
     def trace_key(self) -> tuple:
         return super().trace_key() + (self.state.f0, self.state.f0_walk)
@@ -928,6 +931,8 @@ class CookTorrance(BRDF):
         # per lane (a source None: never contracted as a constant)
         f0 = "f0" if o.fresnel == "schlick" else None
         if self.uses_directional():
+            if self.state.f0_walk:          # another form's F0 computed once (update_lobes)
+                f0 = "f0_walk"
             return directional.Directional(
                 o.distribution, parameters=lambda inp: (inp.microfacet.alpha, inp.f0_walk),
                 sources=("alpha", f0), colour=lambda inp: inp.colour_s)

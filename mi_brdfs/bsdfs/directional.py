@@ -79,12 +79,14 @@ import numpy as np
 from .compensation import Compensation, Specialised, Table, coloured, per_channel, shipped
 from .grid import Axis, Grid
 
+FLOOR = 1e-4               # S is interpolated as log(S + FLOOR x its largest at that α)
+ALPHA_START = 0.01         # below it the table holds α 0.01 (its bounces k >= 2: < 1e-3 of white)
 ALPHA_END = 2.0            # the roughness up to which the walk is tabulated (held beyond)
-PAIR_PATHS = 1 << 15       # walk paths per node and per end
+PAIR_PATHS = 1 << 14       # walk paths per node and per end
 MU_AXIS_I = Axis("mu_i", 0.0, 1.0, 13, "sqrt")
 MU_AXIS_O = Axis("mu_o", 0.0, 1.0, 13, "sqrt")
 U_AXIS = Axis("u", 0.0, 1.0, 9, "sqrt")
-ALPHA_AXIS = Axis("alpha", 0.0, ALPHA_END, 12, "sqrt", smooth=True)
+ALPHA_AXIS = Axis("alpha", ALPHA_START, ALPHA_END, 17, "log", smooth=True)
 F0_AXIS = Axis("f0", 0.0, 1.0, 6, smooth=True)
 PAIR_AXES = (MU_AXIS_I, MU_AXIS_O, U_AXIS, ALPHA_AXIS, F0_AXIS)
 ALBEDO_AXES = (Axis("mu", 0.0, 1.0, 13, "sqrt"), ALPHA_AXIS, F0_AXIS)
@@ -190,17 +192,42 @@ class PairTable(Table):
 
     def __init__(self, values: np.ndarray, spec: PairSpec):
         self.axes, self.directions, self.specs = PAIR_AXES, 3, (spec,)
-        # Not clipped at 0 (as the separable tables' coefficients are): near F0 = 0,
-        # where S grows as F0², clipped coefficients lift the spline off its nodes
-        # (9e-4 of white at GGX α 0.3, F0 0); the lookup is clamped at 0 instead.
-        self.grid = Grid(self.axes, values)
+        # log(S + floor) is interpolated, not S: S spans decades along α near the
+        # grazing mirror pair (3e3 at α 0.017, 0.28 at α 0.26) and falls off a
+        # cliff side on (Beckmann α 1: 0.044 sr⁻¹ at 60°/60°, 2e-9 at 80°/80°),
+        # where a spline of S itself rang (12 sr⁻¹ for the walk's 0.28 at 87°/87°,
+        # α 0.3) and linear steps lit pairs the walk leaves dark. The floor, FLOOR
+        # times S's largest at each α node, keeps what is far below the largest
+        # interpolated about linearly (no log of 0).
+        values = np.maximum(values, 0.0)
+        floor = FLOOR * np.maximum(values.max(axis=(0, 1, 2, 4)), 1e-30)
+        self.grid = Grid(self.axes, np.log(values + floor[None, None, None, :, None]))
+        self.floor = FloorTable(np.log(floor))
         # (no average: the lobe is normalised by its table, not by G_avg)
         self.average_grid = Grid(self.axes[3:], np.zeros(tuple(a.n for a in self.axes[3:])))
+
+    @staticmethod
+    def value(logged, log_floor):
+        """S from the interpolated log(S + floor) and log(floor) (>= 0)."""
+        return dr.fmax(dr.exp(logged) - dr.exp(log_floor), 0.0)
 
     def coordinates(self, pair) -> list:
         wi, wo = pair
         clamp = lambda mu: dr.fmin(dr.fmax(mu, 0.0), 1.0)
         return [clamp(wi.z), clamp(wo.z), u_coordinate(wi, wo)]
+
+
+class FloorTable(Table):
+    """log of :class:`PairTable`'s floor over (α, F0) (the same at every F0),
+    a table of no direction, so that it is specialised as the pair table is."""
+
+    def __init__(self, log_floor: np.ndarray):
+        self.axes, self.directions, self.specs = (ALPHA_AXIS, F0_AXIS), 0, ()
+        self.grid = Grid(self.axes, np.repeat(log_floor[:, None], F0_AXIS.n, axis=1))
+        self.average_grid = self.grid
+
+    def coordinates(self, v) -> list:
+        return []
 
 
 class Directional(Compensation):
@@ -216,8 +243,8 @@ class Directional(Compensation):
         self.pairs = _pair_table(distribution)
         self.albedos = _albedo_table(distribution)
         self.parameters, self.sources, self.colour_of = parameters, tuple(sources), colour
-        # per channel: (pairs, albedo) specialised at that channel's constants
-        self.specialised: list[tuple[Specialised, Specialised]] = []
+        # per channel: (pairs, albedo, floor) specialised at that channel's constants
+        self.specialised: list[tuple[Specialised, Specialised, Specialised]] = []
 
     def prepare(self, plugin) -> dict:
         """Contract the parameters that are constant over the surface, a colour
@@ -238,24 +265,29 @@ class Directional(Compensation):
         self.specialised = []
         for c in range(max(channels, 1)):
             at = tuple(v[c] if isinstance(v, list) else v for v in constants)
-            self.specialised.append((self.pairs.specialise(at), self.albedos.specialise(at)))
+            self.specialised.append((self.pairs.specialise(at), self.albedos.specialise(at),
+                                     self.pairs.floor.specialise(at)))
         self.per_channel = channels > 0
-        return {"pairs": [p.data for p, _ in self.specialised],
-                "albedo": [a.data for _, a in self.specialised]}
+        return {key: [tables[k].data for tables in self.specialised]
+                for k, key in enumerate(("pairs", "albedo", "floor"))}
 
     def _lookup(self, which: int, inp, at, data):
         """The pair table (which 0, at (wi, wo)) or the albedo table (1, at a
         direction) per channel where F0 is a colour, clamped at 0."""
         params = self.parameters(inp)
-        key = "pairs" if which == 0 else "albedo"
+
+        def one(c, p):
+            tables = self.specialised[c]
+            if which == 1:
+                return dr.fmax(tables[1](at, p, data["albedo"][c]), 0.0)
+            return PairTable.value(tables[0](at, p, data["pairs"][c]),
+                                   tables[2](None, p, data["floor"][c]))
+
         if not self.per_channel:
-            return per_channel(lambda p: dr.fmax(self.specialised[0][which](at, p, data[key][0]),
-                                                 0.0), params)
+            return per_channel(lambda p: one(0, p), params)
         colour = next(p for p in params if coloured(p))
-        return type(colour)(*(
-            dr.fmax(self.specialised[c][which](at, tuple(p[c] if coloured(p) else p
-                                                          for p in params), data[key][c]), 0.0)
-            for c in range(len(self.specialised))))
+        return type(colour)(*(one(c, tuple(p[c] if coloured(p) else p for p in params))
+                              for c in range(len(self.specialised))))
 
     def albedo(self, inp, v, data):
         return self._lookup(1, inp, v, data)

@@ -5,7 +5,8 @@ A :class:`Grid` holds the values of a function at the nodes of its axes (an
 with textured parameters and are differentiable in every coordinate. An
 :class:`Axis` places its ``n`` nodes uniformly in a warped coordinate u
 (``linear``: x itself; ``sqrt``: sqrt(x), denser near ``lo``; ``log1p``:
-log(1 + x), for exponents spanning decades; ``ratio``: sqrt(x / (1 + x)) and
+log(1 + x), for exponents spanning decades; ``log``: log(x), ``lo`` > 0, for a
+roughness whose features scale with it (below ``lo`` the value at ``lo``); ``ratio``: sqrt(x / (1 + x)) and
 ``root``: sqrt(x) / (1 + sqrt(x)), which map [0, ∞] onto [0, 1] — sqrt near 0,
 the last node is x = ∞, and 1 - u falls as 1/(2x) or 1/sqrt(x) towards it);
 values beyond the ends are clamped to them.
@@ -94,6 +95,8 @@ class Axis:
             with np.errstate(invalid="ignore"):
                 u = np.sqrt(x / (1.0 + x)) if self.warp == "ratio" else np.sqrt(x) / (1.0 + np.sqrt(x))
             return np.where(np.isinf(x), 1.0, u)
+        if self.warp == "log":
+            return np.log(np.maximum(x, self.lo))
         return {"linear": lambda v: v, "sqrt": np.sqrt, "log1p": np.log1p}[self.warp](x)
 
     def _inverse_np(self, u):
@@ -102,13 +105,16 @@ class Axis:
                 if self.warp == "ratio":
                     return np.where(u >= 1.0, np.inf, u * u / (1.0 - u * u))
                 return np.where(u >= 1.0, np.inf, (u / (1.0 - u)) ** 2)
-        return {"linear": lambda v: v, "sqrt": np.square, "log1p": np.expm1}[self.warp](u)
+        return {"linear": lambda v: v, "sqrt": np.square, "log1p": np.expm1,
+                "log": np.exp}[self.warp](u)
 
     def _forward_dr(self, x):
         if self.warp == "sqrt":
             return dr.sqrt(dr.fmax(x, 0.0))
         if self.warp == "log1p":
             return dr.log(1.0 + dr.fmax(x, 0.0))
+        if self.warp == "log":
+            return dr.log(dr.fmax(x, self.lo))
         if self.warp == "ratio":
             x = dr.fmax(x, 0.0)
             return dr.sqrt(x / (1.0 + x))
@@ -153,6 +159,8 @@ class Axis:
             du = scale * 0.5 / np.sqrt(x)
         elif self.warp == "log1p":
             du = scale / (1.0 + x)
+        elif self.warp == "log":
+            du = scale / x
         elif self.warp == "ratio":
             du = scale * 0.5 / (np.sqrt(x / (1.0 + x)) * (1.0 + x) ** 2)
         elif self.warp == "root":

@@ -196,11 +196,18 @@ def energy(s: Settings, refs: References) -> list[dict]:
     built: dict[str, float] = {}
     rows = []
     for name, config in cases.every("energy"):
-        t = alternating({"off": mi.load_dict(scene_dict(config, s.res)),
-                         "on": mi.load_dict(scene_dict({**config, "energy_compensation": True},
-                                                       s.res))}, s.spp, s.repeats)
+        compensated = {**config, "energy_compensation": True}
+        ms = mi.load_dict(compensated).compensation()
+        scenes = {"off": mi.load_dict(scene_dict(config, s.res)),
+                  "on": mi.load_dict(scene_dict(compensated, s.res))}
+        directional = getattr(ms, "directional", False)
+        if directional:               # cook_torrance's directional lobe: its separable one too
+            scenes["separable"] = mi.load_dict(scene_dict({**compensated,
+                                                           "compensation": "separable"}, s.res))
+        t = alternating(scenes, s.spp, s.repeats)
         t_off, t_on = t["off"], t["on"]
-        # the single-scattering table the compensation is made from (none: analytic)
+        # the single-scattering table the compensation is made from (none: analytic
+        # or, for the directional lobe, the pair table, built by the tables command)
         table = getattr(mi.load_dict(config).compensation(), "table", None)
         spec = next((t for t in table.specs if isinstance(t, AlbedoSpec)), None) if table \
             else None
@@ -211,7 +218,11 @@ def energy(s: Settings, refs: References) -> list[dict]:
         rows.append({"name": name, "off_s": t_off["median_s"], "on_s": t_on["median_s"],
                      "ratio": t_on["median_s"] / t_off["median_s"],
                      "execution_ratio": t_on["execution_s"] / t_off["execution_s"],
-                     "table": spec.name if spec else "(analytic)",
+                     **({"separable_s": t["separable"]["median_s"],
+                         "vs_separable": t_on["median_s"] / t["separable"]["median_s"]}
+                        if directional else {}),
+                     "table": spec.name if spec else (ms.pairs.specs[0].name if directional
+                                                      else "(analytic)"),
                      "table_nodes": int(np.prod([a.n for a in spec.axes])) if spec else 0,
                      "table_samples": s.table_samples if spec else 0,
                      "table_build_s": built[spec.name] if spec else 0.0})

@@ -100,10 +100,13 @@ def lobes(rows: list[dict]) -> str:
 def energy(rows: list[dict]) -> str:
     ratios = ", ".join(f"{r['name']} {r['ratio']:.2f}x" for r in rows)
     tables = [r for r in rows if r["table_build_s"] > 0]
+    execution = ", ".join(f"{r['name']} {r['execution_ratio']:.2f}x" for r in rows)
+    directional = [r for r in rows if "vs_separable" in r]
+    versus = ("; the directional lobe over the separable one: " + ", ".join(
+        f"{r['name']} {r['vs_separable']:.2f}x" for r in directional)) if directional else ""
     return (f"Energy compensation, render time on / off: {ratios} (goal <= 1.10: "
             f"{'met' if all(r['ratio'] <= 1.10 for r in rows) else 'not met'}; kernel "
-            "execution on / off: " + ", ".join(f"{r['name']} {r['execution_ratio']:.2f}x"
-                                               for r in rows) + "). "
+            f"execution on / off: {execution}){versus}. "
             f"Building a table ({tables[0]['table_samples']}² samples per node): "
             + ", ".join(f"{r['table']} {r['table_build_s']:.2f} s" for r in tables) + ".")
 

@@ -933,6 +933,9 @@ class CookTorrance(BRDF):
         if self.uses_directional():
             if self.state.f0_walk:          # another form's F0 computed once (update_lobes)
                 f0 = "f0_walk"
+            elif o.fresnel != "schlick":    # computed per lane, constant where its inputs are
+                f0 = tuple(n for n in ("f0",) + FRESNEL_PARAMS[o.fresnel]
+                           if n != "f0" or o.fresnel == "f82")
             return directional.Directional(
                 o.distribution, parameters=lambda inp: (inp.microfacet.alpha, inp.f0_walk),
                 sources=("alpha", f0), colour=lambda inp: inp.colour_s)

@@ -76,7 +76,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from .compensation import Compensation, Specialised, Table, coloured, per_channel, shipped
+from .compensation import Compensation, Table, coloured, per_channel, shipped
 from .grid import Axis, Grid
 
 FLOOR = 1e-4               # S is interpolated as log(S + FLOOR x its largest at that α)
@@ -87,15 +87,17 @@ MU_AXIS_I = Axis("mu_i", 0.0, 1.0, 13, "sqrt")
 MU_AXIS_O = Axis("mu_o", 0.0, 1.0, 13, "sqrt")
 U_AXIS = Axis("u", 0.0, 1.0, 9, "sqrt")
 ALPHA_AXIS = Axis("alpha", ALPHA_START, ALPHA_END, 17, "log", smooth=True)
-F0_AXIS = Axis("f0", 0.0, 1.0, 6, smooth=True)
-PAIR_AXES = (MU_AXIS_I, MU_AXIS_O, U_AXIS, ALPHA_AXIS, F0_AXIS)
+F0_AXIS = Axis("f0", 0.0, 1.0, 6, smooth=True)           # the walk's F0 nodes
+SHAPE_F0_AXIS = Axis("f0", 0.2, 1.0, 5, smooth=True)     # the shape's (held below 0.2)
+STORED_AXES = (MU_AXIS_I, MU_AXIS_O, U_AXIS, ALPHA_AXIS, F0_AXIS)   # the walked S
+PAIR_AXES = (MU_AXIS_I, MU_AXIS_O, U_AXIS, ALPHA_AXIS, SHAPE_F0_AXIS)   # its shape's lookup
 ALBEDO_AXES = (Axis("mu", 0.0, 1.0, 13, "sqrt"), ALPHA_AXIS, F0_AXIS)
 
 
 @dataclass(frozen=True)
 class PairSpec:
     """The walk's bounces k >= 2 by pair of directions, S = f_ms (μ_i + μ_o),
-    of the Smith microsurface of ``distribution``, over :data:`PAIR_AXES`;
+    of the Smith microsurface of ``distribution``, over :data:`STORED_AXES`;
     built by :func:`mi_brdfs.tools.tables.build_pairs`."""
     distribution: str
     paths: int = PAIR_PATHS
@@ -106,7 +108,7 @@ class PairSpec:
 
     @property
     def axes(self) -> tuple[Axis, ...]:
-        return PAIR_AXES
+        return STORED_AXES
 
 
 @dataclass(frozen=True)
@@ -185,31 +187,20 @@ def u_coordinate(wi, wo):
 #  The lobe
 # ----------------------------------------------------------------------------
 
-class PairTable(Table):
-    """S over (μ_i, μ_o, u, α, F0): a :class:`.compensation.Table` whose
-    direction is the pair (ω_i, ω_o), so that :class:`.compensation.Specialised`
-    contracts its constant α and F0 as it does a table's of one direction."""
+LOW_F0 = 0.2                     # below it S is S(0) plus S(0.2)'s F0-dependent part
 
-    def __init__(self, values: np.ndarray, spec: PairSpec):
-        self.axes, self.directions, self.specs = PAIR_AXES, 3, (spec,)
-        # log(S + floor) is interpolated, not S: S spans decades along α near the
-        # grazing mirror pair (3e3 at α 0.017, 0.28 at α 0.26) and falls off a
-        # cliff side on (Beckmann α 1: 0.044 sr⁻¹ at 60°/60°, 2e-9 at 80°/80°),
-        # where a spline of S itself rang (12 sr⁻¹ for the walk's 0.28 at 87°/87°,
-        # α 0.3) and linear steps lit pairs the walk leaves dark. The floor, FLOOR
-        # times S's largest at each α node, keeps what is far below the largest
-        # interpolated about linearly (no log of 0).
-        values = np.maximum(values, 0.0)
-        floor = FLOOR * np.maximum(values.max(axis=(0, 1, 2, 4)), 1e-30)
-        self.grid = Grid(self.axes, np.log(values + floor[None, None, None, :, None]))
-        self.floor = FloorTable(np.log(floor))
+
+class ShapeTable(Table):
+    """log(R + floor) of a shape R over the pair (ω_i, ω_o) and the
+    parameters ``axes[3:]``: a :class:`.compensation.Table` whose direction is
+    the pair, so that :class:`.compensation.Specialised` contracts constant
+    parameters as it does a table's of one direction."""
+
+    def __init__(self, axes, logged: np.ndarray, spec):
+        self.axes, self.directions, self.specs = tuple(axes), 3, (spec,)
+        self.grid = Grid(self.axes, logged)
         # (no average: the lobe is normalised by its table, not by G_avg)
         self.average_grid = Grid(self.axes[3:], np.zeros(tuple(a.n for a in self.axes[3:])))
-
-    @staticmethod
-    def value(logged, log_floor):
-        """S from the interpolated log(S + floor) and log(floor) (>= 0)."""
-        return dr.fmax(dr.exp(logged) - dr.exp(log_floor), 0.0)
 
     def coordinates(self, pair) -> list:
         wi, wo = pair
@@ -217,17 +208,116 @@ class PairTable(Table):
         return [clamp(wi.z), clamp(wo.z), u_coordinate(wi, wo)]
 
 
-class FloorTable(Table):
-    """log of :class:`PairTable`'s floor over (α, F0) (the same at every F0),
-    a table of no direction, so that it is specialised as the pair table is."""
+class ScaleTable(Table):
+    """A function of the parameters alone (α, and F0 on ``f0_axis``) beside a
+    :class:`ShapeTable` (a magnitude, a floor): a table of no direction,
+    specialised as the shape is."""
 
-    def __init__(self, log_floor: np.ndarray):
-        self.axes, self.directions, self.specs = (ALPHA_AXIS, F0_AXIS), 0, ()
-        self.grid = Grid(self.axes, np.repeat(log_floor[:, None], F0_AXIS.n, axis=1))
+    def __init__(self, values: np.ndarray, f0_axis: Axis | None = None):
+        self.axes = (ALPHA_AXIS,) + ((f0_axis,) if f0_axis is not None else ())
+        self.directions, self.specs = 0, ()
+        self.grid = Grid(self.axes, values)
         self.average_grid = self.grid
 
     def coordinates(self, v) -> list:
         return []
+
+
+class PairTable:
+    """S over (μ_i, μ_o, u, α, F0) as the lookup reads it (:meth:`Reader.s`):
+    its magnitude M(α, F0), the mean of S over the direction nodes, times its
+    shape R = S / M, of which log(R + floor) is interpolated.
+
+    - M is smooth in α and F0 (a C2 spline of it in F0 is within 0.3 % of the
+      walk's albedo between F0 nodes, where S grows as F0²).
+    - log R: near the grazing mirror pair S spans decades between α nodes (3e3
+      at α 0.017, 0.28 at α 0.26) and falls off a cliff side on (Beckmann α 1:
+      0.044 sr⁻¹ at 60°/60°, 2e-9 at 80°/80°), where a spline of S itself rang
+      (12 sr⁻¹ for the walk's 0.28 at 87°/87°, α 0.3) and linear steps lit pairs
+      the walk leaves dark. The floor, FLOOR times R's largest at each α node,
+      takes what is far below the largest about linearly (no log of 0).
+    - R over F0 from ``LOW_F0`` up; below, S(F0) = S(0) + (M(F0) - M(0)) /
+      (M(LOW_F0) - M(0)) · (S(LOW_F0) - S(0)): at F0 0 the light that is left,
+      the grazing bounces' Fresnel alone, has another shape, which no spline of
+      log R joins to the rest (with one, 9-12 % off the walk's albedo at F0 0.1,
+      30 times it at F0 0, normal incidence)."""
+
+    def __init__(self, values: np.ndarray, spec: PairSpec):
+        values = np.maximum(values, 0.0)
+        self.specs = (spec,)
+        magnitude = np.maximum(values.mean(axis=(0, 1, 2)), 1e-30)          # (α, F0)
+        shape = values / magnitude[None, None, None]
+        floor = FLOOR * np.maximum(shape.max(axis=(0, 1, 2)), 1e-30)        # (α, F0)
+        logged = np.log(shape + floor[None, None, None])
+        self.shape = ShapeTable(PAIR_AXES, logged[..., 1:], spec)
+        self.shape0 = ShapeTable(PAIR_AXES[:4], logged[..., 0], spec)
+        self.floor = ScaleTable(np.log(floor[:, 1:]), SHAPE_F0_AXIS)
+        self.floor0 = ScaleTable(np.log(floor[:, 0]))
+        self.magnitude = ScaleTable(magnitude, F0_AXIS)
+
+    @staticmethod
+    def value(logged, log_floor, magnitude):
+        """S from the interpolated log(R + floor), log(floor) and M (>= 0)."""
+        return dr.fmax(magnitude, 0.0) * dr.fmax(dr.exp(logged) - dr.exp(log_floor), 0.0)
+
+
+class Reader:
+    """One channel's view of a :class:`PairTable` (every channel alike unless
+    F0 is a constant colour): its tables specialised at the constant α and F0
+    (None: read per lane). A constant F0 at or above ``LOW_F0`` reads one shape;
+    below, S(0) and S(LOW_F0) too; one read per lane, all three."""
+
+    def __init__(self, table: PairTable, albedos: Table, alpha, f0):
+        self.low = None if f0 is None else f0 < LOW_F0          # None: per lane
+        at = (alpha, f0)
+        parts = {} if albedos is None else {"albedo": albedos.specialise(at)}
+        if self.low is not True:
+            parts.update(shape=table.shape.specialise(at), floor=table.floor.specialise(at),
+                         magnitude=table.magnitude.specialise(at))
+        if self.low is not False:
+            parts.update(shape0=table.shape0.specialise((alpha,)),
+                         floor0=table.floor0.specialise((alpha,)),
+                         shape_low=table.shape.specialise((alpha, LOW_F0)),
+                         floor_low=table.floor.specialise((alpha, LOW_F0)),
+                         magnitude=table.magnitude.specialise(at),
+                         magnitude0=table.magnitude.specialise((alpha, 0.0)),
+                         magnitude_low=table.magnitude.specialise((alpha, LOW_F0)))
+        self.parts = parts
+        self.fixed = tuple(parts["magnitude"].fixed)
+
+    def data(self) -> dict:
+        return {name: part.data for name, part in self.parts.items()}
+
+    def s(self, pair, alpha, f0, data):
+        """S at the pair for the lane's α and F0 (see :class:`PairTable`)."""
+        read = lambda name, at, params: self.parts[name](at, params, data[name])
+        m = read("magnitude", None, (alpha, f0))
+        high = low = None
+        if self.low is not True:
+            high = PairTable.value(read("shape", pair, (alpha, f0)),
+                                   read("floor", None, (alpha, f0)), m)
+        if self.low is not False:
+            s0 = PairTable.value(read("shape0", pair, (alpha,)), read("floor0", None, (alpha,)),
+                                 read("magnitude0", None, (alpha, None)))
+            m0 = read("magnitude0", None, (alpha, None))
+            m_low = read("magnitude_low", None, (alpha, None))
+            s_low = PairTable.value(read("shape_low", pair, (alpha, None)),
+                                    read("floor_low", None, (alpha, None)), m_low)
+            span = m_low - m0
+            t = (m - m0) / dr.select(span > 0.0, span, 1.0)
+            low = s0 + t * (s_low - s0)
+        if high is None:
+            return low
+        if low is None:
+            return high
+        return dr.select(f0 < LOW_F0, low, high)
+
+
+def read_s(table: PairTable, pair, alpha: float, f0: float):
+    """S of ``table`` at the pair (ω_i, ω_o) for one α and F0, as the plugin
+    reads it (the tables command integrates it into the albedo table)."""
+    reader = Reader(table, None, alpha, f0)
+    return reader.s(pair, alpha, f0, reader.data())
 
 
 class Directional(Compensation):
@@ -243,54 +333,49 @@ class Directional(Compensation):
         self.pairs = _pair_table(distribution)
         self.albedos = _albedo_table(distribution)
         self.parameters, self.sources, self.colour_of = parameters, tuple(sources), colour
-        # per channel: (pairs, albedo, floor) specialised at that channel's constants
-        self.specialised: list[tuple[Specialised, Specialised, Specialised]] = []
+        self.readers: list[Reader] = []
 
     def prepare(self, plugin) -> dict:
         """Contract the parameters that are constant over the surface, a colour
-        one (an F0 per channel, RGB variants) per channel: a lookup then gathers
-        8 values per channel instead of 32 (the F0 spline's 4 x 8)."""
+        one (an F0 per channel, RGB variants) per channel: a shape lookup then
+        gathers 8 values (32 with F0 read per lane)."""
         inp = plugin.eval_textures(dr.zeros(mi.SurfaceInteraction3f), True)
-        members = [None if name is None else getattr(plugin, "m_" + name) for name in self.sources]
+        # a source: a parameter's name, or the names of those it is computed from
+        # (another Fresnel form's F0: constant where they are, differentiated or not)
+        members = [[] if name is None else [getattr(plugin, "m_" + n) for n in
+                                            ((name,) if isinstance(name, str) else name)]
+                   for name in self.sources]
+        varies = lambda obj: isinstance(obj, mi.Object) and obj.is_spatially_varying()
         constants = []
-        for obj, x in zip(members, self.parameters(inp)):
-            if obj is None or (isinstance(obj, mi.Object) and obj.is_spatially_varying()) \
+        for objs, x in zip(members, self.parameters(inp)):
+            if not objs or any(varies(obj) for obj in objs) \
                     or (coloured(x) and mi.is_spectral):     # (per sampled wavelength)
                 constants.append(None)
             elif coloured(x):
                 constants.append([_number(x[c]) for c in range(dr.size_v(x))])
             else:
                 constants.append(_number(x))
-        channels = max((len(c) for c in constants if isinstance(c, list)), default=0)
-        self.specialised = []
-        for c in range(max(channels, 1)):
-            at = tuple(v[c] if isinstance(v, list) else v for v in constants)
-            self.specialised.append((self.pairs.specialise(at), self.albedos.specialise(at),
-                                     self.pairs.floor.specialise(at)))
-        self.per_channel = channels > 0
-        return {key: [tables[k].data for tables in self.specialised]
-                for k, key in enumerate(("pairs", "albedo", "floor"))}
+        count = max((len(c) for c in constants if isinstance(c, list)), default=0)
+        alpha, f0 = constants
+        self.readers = [Reader(self.pairs, self.albedos, alpha,
+                               f0[c] if isinstance(f0, list) else f0)
+                        for c in range(max(count, 1))]
+        self.per_channel = count > 0
+        return {"channels": [reader.data() for reader in self.readers]}
 
-    def _lookup(self, which: int, inp, at, data):
-        """The pair table (which 0, at (wi, wo)) or the albedo table (1, at a
-        direction) per channel where F0 is a colour, clamped at 0."""
+    def _each(self, inp, one):
+        """``one(reader, its data, (alpha, f0))`` per channel where F0 is a
+        constant colour, else per channel of the lane's F0 (:func:`per_channel`)."""
         params = self.parameters(inp)
-
-        def one(c, p):
-            tables = self.specialised[c]
-            if which == 1:
-                return dr.fmax(tables[1](at, p, data["albedo"][c]), 0.0)
-            return PairTable.value(tables[0](at, p, data["pairs"][c]),
-                                   tables[2](None, p, data["floor"][c]))
-
         if not self.per_channel:
-            return per_channel(lambda p: one(0, p), params)
+            return per_channel(lambda p: one(self.readers[0], 0, p), params)
         colour = next(p for p in params if coloured(p))
-        return type(colour)(*(one(c, tuple(p[c] if coloured(p) else p for p in params))
-                              for c in range(len(self.specialised))))
+        return type(colour)(*(one(reader, c, tuple(p[c] if coloured(p) else p for p in params))
+                              for c, reader in enumerate(self.readers)))
 
     def albedo(self, inp, v, data):
-        return self._lookup(1, inp, v, data)
+        return self._each(inp, lambda r, c, p: dr.fmax(
+            r.parts["albedo"](v, p, data["channels"][c]["albedo"]), 0.0))
 
     def average(self, inp, data):
         return 1.0                       # (unused: value() is the lobe)
@@ -302,11 +387,11 @@ class Directional(Compensation):
         """C f_ms cos θ_o (f_ms per channel for a coloured F0), 0 below the horizon."""
         cos_i, cos_o = dr.fmax(wi.z, 0.0), dr.fmax(wo.z, 0.0)
         scale = cos_o / dr.fmax(cos_i + cos_o, 1e-30)
-        return ms[2] * (self._lookup(0, inp, (wi, wo), data) * scale)
+        s = self._each(inp, lambda r, c, p: r.s((wi, wo), p[0], p[1], data["channels"][c]))
+        return ms[2] * (s * scale)
 
     def key(self) -> tuple:
-        return ("directional", len(self.specialised)) + (
-            tuple(self.specialised[0][0].fixed) if self.specialised else ())
+        return ("directional",) + tuple((r.low, r.fixed) for r in self.readers)
 
 
 def _number(x) -> float:

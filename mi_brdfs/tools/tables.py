@@ -169,25 +169,22 @@ def pair_albedo(spec, values: np.ndarray, n: int = 96) -> np.ndarray:
     """The directional albedo of the interpolated pair table, ∫ f_ms cos θ_o dω_o,
     at the nodes of :data:`mi_brdfs.bsdfs.directional.ALBEDO_AXES` (μ, α, F0):
     a midpoint rule over cos θ_o (n) and the azimuth (2n over [0, π], the
-    table being even in it), the table looked up as the plugin does."""
+    table being even in it), the table read as the plugin reads it."""
     table = directional.PairTable(values, spec)
     mu_axis, alpha_axis, f0_axis = directional.ALBEDO_AXES
     mo = (np.arange(n) + 0.5) / n
     ph = (np.arange(2 * n) + 0.5) / (2 * n) * np.pi
     out = np.zeros((mu_axis.n, alpha_axis.n, f0_axis.n))
     weight = 2.0 * (1.0 / n) * (np.pi / (2 * n))       # dμ_o, dφ over [0, π] twice
-    for i, mu in enumerate(np.maximum(mu_axis.nodes(), MU_MIN)):
-        M, P = (g.ravel() for g in np.meshgrid(mo, ph, indexing="ij"))
-        wi, wo = directional.pair_directions(np.full_like(M, mu), M, P)
-        a = mi.Vector3f(*[from_numpy(mi.Float, wi[:, c].astype(np.float32)) for c in range(3)])
-        b = mi.Vector3f(*[from_numpy(mi.Float, wo[:, c].astype(np.float32)) for c in range(3)])
-        coords = table.coordinates((a, b))
-        scale = M / (mu + M)                    # f_ms cos θ_o = S cos θ_o / (μ_i + μ_o)
-        for j, alpha in enumerate(alpha_axis.nodes()):
-            for k, f0 in enumerate(f0_axis.nodes()):
-                a, f = mi.Float(alpha), mi.Float(f0)
-                s = np.asarray(table.value(table.grid(*coords, a, f), table.floor.grid(a, f)))
-                out[i, j, k] = float(np.sum(s * scale) * weight)
+    for j, alpha in enumerate(alpha_axis.nodes()):
+        for k, f0 in enumerate(f0_axis.nodes()):
+            for i, mu in enumerate(np.maximum(mu_axis.nodes(), MU_MIN)):
+                M, P = (g.ravel() for g in np.meshgrid(mo, ph, indexing="ij"))
+                wi, wo = directional.pair_directions(np.full_like(M, mu), M, P)
+                pair = tuple(mi.Vector3f(*[from_numpy(mi.Float, w[:, c].astype(np.float32))
+                                           for c in range(3)]) for w in (wi, wo))
+                s = np.asarray(directional.read_s(table, pair, float(alpha), float(f0)))
+                out[i, j, k] = float(np.sum(s * M / (mu + M)) * weight)
     return out
 
 

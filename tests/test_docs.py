@@ -746,7 +746,7 @@ def test_the_energy_guides_ladder_tables_are_the_committed_run(site):
         mine = {r["rung"]: r for r in rows if (r["material"], r["lighting"]) == case}
         found = [line for line in lines if line.startswith(f"{case[0]}, {case[1]}")]
         assert len(found) == 2, (case, found)
-        for rung in ("single", "separable", "walk"):
+        for rung in ("single", "separable", "directional", "walk"):
             r = mine[rung]
             assert f"{r['flip_mean']:.3f}, {r['light_vs_walk']:.3f}" in found[0], (case, rung)
             noise = f"{r['noise_relmse'] * 1e3:.2g}"

@@ -27,8 +27,9 @@ could hold that narrow a difference, so the closed form carries it.
 **The table.** S = f_ms (cos θ_i + cos θ_o) over five axes: cos θ_i and
 cos θ_o (13 nodes each, denser towards grazing), the half vector's place u
 between the mirror azimuth and retro-reflection (9 nodes, denser near the
-mirror), α (12 nodes up to ``ALPHA_END``, a C2 B-spline) and Schlick's F0
-(6 nodes, a C2 B-spline). With θ_h the angle of h = (ω_i + ω_o)/|ω_i + ω_o|
+mirror), α (17 nodes, log-spaced from ``ALPHA_START`` to ``ALPHA_END``) and
+Schlick's F0 (6 nodes); read as its magnitude times its shape
+(:class:`PairTable`). With θ_h the angle of h = (ω_i + ω_o)/|ω_i + ω_o|
 from the normal,
 
 .. math::

@@ -87,9 +87,10 @@ the pdf within 0.006. It needs ``geometry="smith"``,
 as ``roughplastic``; the table is not differentiated (as there).
 
 **Energy compensation** (``energy_compensation``), with Smith's G, GGX or
-Beckmann and one ``alpha``: the **directional** lobe (``compensation``, the
-default; :mod:`mi_brdfs.bsdfs.directional`), the random walk's bounces k >= 2
-(Heitz, Hanika, d'Eon & Dachsbacher 2016) tabulated by pair of directions
+Beckmann and one ``alpha``: the **directional** lobe (``compensation="auto"``,
+the default, or ``"directional"``; :mod:`mi_brdfs.bsdfs.directional`), the
+random walk's bounces k >= 2 (Heitz, Hanika, d'Eon & Dachsbacher 2016)
+tabulated by pair of directions
 over (cos θ_i, cos θ_o, the half vector's place between the mirror azimuth and
 retro-reflection, α up to 2, F0), and the height-correlated single
 scattering (Heitz 2014) in place of G1·G1: the light goes where the walk puts
@@ -379,7 +380,7 @@ def walk_residual(distribution: str, geometry: str,
 # ``f0`` (``material`` stands for ``eta`` and ``kappa``).
 FRESNELS = ("schlick", "conductor", "dielectric", "f82")
 MULTIPLE_SCATTERING = ("none", "walk")
-COMPENSATIONS = ("directional", "separable")
+COMPENSATIONS = ("auto", "directional", "separable")
 BASES = ("lambert", "plastic")
 FRESNEL_PARAMS = {"schlick": (), "conductor": ("eta", "kappa"),
                   "dielectric": ("int_ior", "ext_ior"), "f82": ("f82_tint",)}
@@ -474,9 +475,10 @@ class CookTorrance(BRDF):
                    'plugin\'s Fresnel form at every bounce. Needs ``geometry="smith"``, '
                    '``beckmann`` or ``ggx`` (isotropic or anisotropic), ``mode="hdr"``, '
                    '``base="lambert"``, no ``energy_compensation``.'),
-        Option("compensation", "directional", COMPENSATIONS,
-               doc='the lobe ``energy_compensation`` adds: ``"directional"`` (with '
-                   '``geometry="smith"``, ``beckmann`` or ``ggx``, isotropic ``alpha``) the '
+        Option("compensation", "auto", COMPENSATIONS,
+               doc='the lobe ``energy_compensation`` adds: ``"auto"`` the directional one '
+                   'where it is tabulated, else the separable one; ``"directional"`` (only '
+                   'with ``geometry="smith"``, ``beckmann`` or ``ggx``, isotropic ``alpha``) the '
                    "random walk's bounces k >= 2 tabulated by pair of directions, with the "
                    "height-correlated single scattering in place of G1·G1 "
                    "(:mod:`mi_brdfs.bsdfs.directional`): the light where the walk puts it; "
@@ -562,11 +564,11 @@ class CookTorrance(BRDF):
                                "plastic substrate's colour; the lambert base has no substrate)")
         if self.options.multiple_scattering == "walk":
             self.check_walk(reader)
-        if "compensation" in props and self.options.compensation == "directional" \
-                and not self.directional_available():
+        if self.options.compensation == "directional" and not self.directional_available():
             raise reader.error("compensation", "directional",
-                               '"separable" unless geometry="smith", distribution "beckmann" or '
-                               '"ggx" and one alpha (the walk is tabulated by pair for these)')
+                               '"auto" or "separable" unless geometry="smith", distribution '
+                               '"beckmann" or "ggx" and one alpha (the walk is tabulated by '
+                               'pair for these)')
         if "material" in props:
             self.read_material(reader)
         for name in ("int_ior", "ext_ior"):
@@ -604,7 +606,7 @@ class CookTorrance(BRDF):
         """The directional lobe is asked for and tabulated here, and the
         roughness is not one value beyond its table's end (``ALPHA_END``, 2:
         the separable lobe, exact in albedo to α = ∞, then takes over)."""
-        if self.options.compensation != "directional" or not self.directional_available():
+        if self.options.compensation == "separable" or not self.directional_available():
             return False
         return not (self.uniform("alpha")
                     and value_range(self.m_alpha)[0] > directional.ALPHA_END)

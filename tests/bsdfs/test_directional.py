@@ -36,7 +36,7 @@ import numpy as np
 import pytest
 from scipy.special import erf
 
-from support import random_hemisphere, rgb, vec
+from support import assert_refused, random_hemisphere, rgb, vec
 
 HERE = os.path.dirname(__file__)
 REF = json.load(open(os.path.join(HERE, "walk_reference_directional.json")))
@@ -281,6 +281,31 @@ def test_reciprocal_to_float_precision(distribution, alpha, f0, rng):
     back = evaluate(bsdf, wo, wi) / np.float32(wi[:, 2])
     assert np.all(np.isfinite(forth)) and np.all(forth >= 0)
     np.testing.assert_allclose(forth, back, rtol=2e-6, atol=1e-9 * forth.max())
+
+
+# ----------------------------------------------------------------------------
+#  The option: "auto" (the default) picks the lobe, "directional" insists
+# ----------------------------------------------------------------------------
+
+def test_auto_is_directional_where_tabulated_and_separable_elsewhere(rng):
+    """With Smith's G, GGX and one α the default ("auto") evaluates as
+    "directional" and not as "separable" (they differ by the grazing rim);
+    with the V-cavity G it evaluates as "separable"; "directional" there is
+    refused with one line naming the choices that load."""
+    wi, wo = random_hemisphere(rng, 256), random_hemisphere(rng, 256)
+
+    def lobe(geometry, **choice):
+        return evaluate(mi.load_dict({"type": "cook_torrance", "distribution": "ggx",
+                                      "geometry": geometry, "alpha": 0.6, "k": 0.0,
+                                      "energy_compensation": True, **choice}), wi, wo)
+    auto = lobe("smith")
+    np.testing.assert_array_equal(auto, lobe("smith", compensation="directional"))
+    assert np.max(np.abs(auto - lobe("smith", compensation="separable"))) > 1e-2
+    np.testing.assert_array_equal(lobe("cook_torrance"),
+                                  lobe("cook_torrance", compensation="separable"))
+    assert_refused({"type": "cook_torrance", "geometry": "cook_torrance",
+                    "energy_compensation": True, "compensation": "directional"},
+                   "compensation", "'directional'", '"auto" or "separable" unless')
 
 
 # ----------------------------------------------------------------------------

@@ -252,26 +252,40 @@ def test_compensated_conductor_matches_the_walk(distribution, alpha):
         assert np.all(np.abs(e - w) <= 0.03 * w + 3e-4), (f0, e.tolist(), w.tolist())
 
 
+# Relative bounds per lobe (separable; directional on GGX, on Beckmann), each
+# above the largest measured by groundtruth --residuals (the directional
+# figures: docs/guide/limitations.md).
+FRESNEL_BOUNDS = {"Au": (0.03, 0.03, 0.03), "Cu": (0.03, 0.03, 0.03),
+                  "Al": (0.03, 0.03, 0.03), "F82 mild": (0.04, 0.04, 0.04),
+                  "dielectric 1.5": (0.03, 0.03, 0.055), "white": (0.01, 0.01, 0.025)}
+
+
+@pytest.mark.parametrize("compensation", ["separable", "auto"])
 @pytest.mark.parametrize("distribution", ["ggx", "beckmann"])
-@pytest.mark.parametrize("name, bound", [("Au", 0.03), ("Cu", 0.03), ("Al", 0.03),
-                                         ("F82 mild", 0.04), ("dielectric 1.5", 0.03),
-                                         ("white", 0.01)])
-def test_compensation_with_every_fresnel_form_matches_its_walk(distribution, name, bound):
+@pytest.mark.parametrize("name", list(FRESNEL_BOUNDS))
+def test_compensation_with_every_fresnel_form_matches_its_walk(distribution, name, compensation):
     """Compensated with the exact conductor (Mitsuba's Au, Cu, Al as the RGB
     variants hold them), F82-tint and the exact dielectric, cook_torrance
     reflects what the random walk does with that Fresnel at every bounce
     (walk_reference_fresnel.json), per colour channel, from 0° to 85°, α 0.1 to
-    1: within 3 % (the walk tables read at the F0 of the Schlick curve of the
-    same hemispherical average), the white conductor (F = 1) within 1 %;
-    F82-tint with a tint of (1, 0.9, 0.8) within 4 % (measured 3.9 % at α 0.2,
-    80°, Beckmann). An F82 whose tint dips to 0.2 is not (28 % at α 0.1, 85°): the walk's
-    grazing bounces see the dip, the average does not. python -m
-    mi_brdfs.tools.groundtruth --reference tests/bsdfs/walk_reference_fresnel.json
-    --residuals prints every figure."""
+    1 (the walk tables read at the F0 of the Schlick curve of the same
+    hemispherical average). The separable lobe: within 3 %, the white
+    conductor (F = 1) within 1 %, F82-tint with a tint of (1, 0.9, 0.8) within
+    4 % (measured 3.03 % at α 0.2, 80°, GGX). The directional lobe (the
+    default here) alike, but on Beckmann the dielectric within 5.5 % (measured
+    4.98 % at α 1, 0°: 0.0011 of a 0.022 albedo) and white within 2.5 %
+    (1.94 % at α 0.1, 85°). An F82 whose tint dips to 0.2 is not (18.6 %
+    directional, 25.2 % separable, at α 0.1, 80–85°): the walk's grazing bounces see the dip, the average does
+    not. python -m mi_brdfs.tools.groundtruth --reference
+    tests/bsdfs/walk_reference_fresnel.json --residuals prints the directional
+    figures."""
+    separable, ggx, beckmann = FRESNEL_BOUNDS[name]
+    bound = separable if compensation == "separable" else ggx if distribution == "ggx" \
+        else beckmann
     form = FORMS[name]
     ref = FRESNEL_REFERENCE
     for a, alpha in enumerate(ref["alpha"]):
-        bsdf = mi.load_dict(fresnel_config(form, distribution, alpha))
+        bsdf = mi.load_dict(fresnel_config(form, distribution, alpha, compensation))
         for t, theta in enumerate(ref["theta"]):
             w = np.array(form["walk"][distribution][t][a])
             e = albedo(bsdf, theta, 0.0, 512)[:len(w)]

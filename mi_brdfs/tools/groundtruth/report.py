@@ -139,14 +139,16 @@ def fresnel_reference(paths: int = 100_000, log=None) -> dict:
     return out
 
 
-def fresnel_config(form: dict, distribution: str, alpha: float) -> dict:
+def fresnel_config(form: dict, distribution: str, alpha: float,
+                   compensation: str = "auto") -> dict:
     """The compensated cook_torrance (k = 0, m_S = 1, Smith G) of one form of
-    :func:`fresnel_forms` (its lists as RGB colours)."""
+    :func:`fresnel_forms` (its lists as RGB colours), with the lobe
+    ``compensation`` (the plugin's option)."""
     params = {k: {"type": "rgb", "value": v} if isinstance(v, list) else v
               for k, v in form["params"].items()}
     return {"type": "cook_torrance", "distribution": distribution, "geometry": "smith",
             "alpha": alpha, "k": 0.0, "specular_reflectance": 1.0,
-            "energy_compensation": True, **params}
+            "energy_compensation": True, "compensation": compensation, **params}
 
 
 def residuals_fresnel(ref: dict, n: int = 512) -> list[dict]:

@@ -204,7 +204,8 @@ def test_the_committed_trade_report_is_written_from_its_records(tmp_path):
     ranking writes from the committed records
     (``python -m mi_brdfs.tools.fit.trade -o docs/benchmarks/trade --from-records``)."""
     from mi_brdfs.tools.fit import trade
-    for path in [COMMITTED / "fits.json", *COMMITTED.glob("*__slices.png")]:   # the run's own
+    for path in [COMMITTED / "fits.json", *COMMITTED.glob("walk.json"),     # the run's own
+                 *COMMITTED.glob("*__slices.png")]:
         shutil.copy(path, tmp_path / path.name)
     trade.rebuild(str(tmp_path))
     for name in ("trade.md", "index.html", "fits.json"):

@@ -27,6 +27,7 @@ import numpy as np
 
 import mitsuba as mi
 
+from .. import compare
 from ..analysis import camera
 from ..measures import render_waited
 
@@ -103,6 +104,17 @@ def release() -> None:
     """Free every object no longer referenced (BSDF instances included):
     Dr.Jit traces every live BSDF instance at every render."""
     gc.collect()
+
+
+def view_metrics(reference: dict, image: dict, res: int) -> dict[str, dict]:
+    """HDR-FLIP and relMSE of ``image``'s renders against ``reference``'s over
+    the sphere's pixels, per view (view: {"flip", "relmse"})."""
+    mask = sphere_mask(res)
+    out = {}
+    for view in VIEWS:
+        m = compare.metrics(reference[view], image[view], flip_mode="hdr", mask=mask)
+        out[view] = {"flip": m["flip"], "relmse": m["relmse"]}
+    return out
 
 
 def render_views(make, res: int, spp: int, seed: int = 0) -> dict[str, np.ndarray]:

@@ -20,7 +20,6 @@ import mitsuba as mi
 
 import mi_brdfs
 
-from .. import compare
 from ..analysis import eval_at_viewer
 from ..errors import one_line
 from ..settings import Settings as SettingsBase
@@ -156,7 +155,6 @@ def images(target, properties: dict, settings: Settings, work=None) -> dict:
     and relMSE over the sphere's pixels per view, and their means; its pixel
     variance over the target's (:func:`variance`). The target's renders and its
     noise floor come from ``work``, or are rendered here."""
-    mask = scene.sphere_mask(settings.res)
     if work is None or work.reference is None:
         from .work import noise_floor
         reference = scene.target_views(target, settings.res, settings.spp, seed=0)
@@ -165,10 +163,7 @@ def images(target, properties: dict, settings: Settings, work=None) -> dict:
     else:
         reference, noise = work.reference, work.noise
     model = scene.render_views(lambda: M.load_dict(properties), settings.res, settings.spp, 0)
-    views = {}
-    for view in scene.VIEWS:
-        m = compare.metrics(reference[view], model[view], flip_mode="hdr", mask=mask)
-        views[view] = {"flip": m["flip"], "relmse": m["relmse"]}
+    views = scene.view_metrics(reference, model, settings.res)
     mean = lambda d, k: float(np.mean([v[k] for v in d.values()]))
     return {**variance(target, properties, settings, reference, model),
             "image_flip": mean(views, "flip"), "image_relmse": mean(views, "relmse"),

@@ -26,10 +26,10 @@ import statistics
 import sys
 
 from ..errors import one_line
-from . import effective, fit, rank, report, targets as T
+from . import effective, fit, rank, report, scene, targets as T
 from .models import EC, names
 from .sweep import progress_printer
-from .task import FULL
+from .task import FULL, QUICK
 
 PLASTIC = "diffuse_reflectance=[0.6,0.2,0.1]"
 TARGETS = (          # (label, target)
@@ -62,8 +62,11 @@ def fit_materials(out_dir: str, quick: bool = False, jobs: int | None = None,
     labels = dict((spec, label) for label, spec in targets)
 
     def write_table(folder: str, records: list[dict]) -> None:
-        with open(os.path.join(folder, "trade.md"), "w") as f:
-            f.write(subset_note(targets) + table(records, labels))
+        walk = walk_flips([spec for _, spec in targets], settings or (QUICK if quick else FULL))
+        with open(os.path.join(folder, WALK_FILE), "w", encoding="utf-8") as f:
+            json.dump(walk, f, indent=1)
+        with open(os.path.join(folder, "trade.md"), "w", encoding="utf-8") as f:
+            f.write(subset_note(targets) + table(records, labels, walk))
 
     return fit([spec for _, spec in targets], out_dir, models, quick=quick, jobs=jobs,
                scheduler=scheduler, show=show, settings=settings,
@@ -90,13 +93,15 @@ CAPTION = ("Each cell: the FLIP of the model's image against the material's, the
            "its median Dr.Jit operation count over the material's.")
 
 
-def table(records: list[dict], labels: dict[str, str] | None = None) -> str:
+def table(records: list[dict], labels: dict[str, str] | None = None,
+          walk: dict[str, dict] | None = None) -> str:
     """"Which model for which material": a Markdown table, one row per model,
     its median render cost over the targets (× the target's, with the median
     of its interval's ends) and its median operation count (× the target's),
     and on each target its image FLIP and its BRDF error (``0.06 · 0.110``);
     the first-ranked model per target (:func:`.rank.ranked`) in bold, as
-    :data:`CAPTION` says."""
+    :data:`CAPTION` says; then the answers, the rungs and, given ``walk``
+    (:func:`walk_flips`), energy compensation against the walk."""
     labels = labels or {}
     first = {spec: id(order[0]) for spec in dict.fromkeys(r["target"] for r in records)
              if (order := rank.ranked([r for r in records if r["target"] == spec]))}
@@ -126,7 +131,8 @@ def table(records: list[dict], labels: dict[str, str] | None = None) -> str:
             text = (f"{flip:.2f} · " if flip is not None else "") + f"{r['brdf_error']:.3f}"
             row.append(f"**{text}**" if first.get(s) == id(r) else text)
         lines.append("| " + " | ".join(row) + " |")
-    return "\n".join(lines) + "\n\n" + answers(records, labels) + ladder(records, labels)
+    return ("\n".join(lines) + "\n\n" + answers(records, labels) + ladder(records, labels)
+            + walk_table(records, walk or {}, labels))
 
 
 RUNG_COLUMNS = (      # (heading, the model's name after cook_torrance/<D>/smith)
@@ -261,12 +267,112 @@ def summary(records: list[dict], labels: dict[str, str] | None = None) -> str:
     return "\n".join(lines)
 
 
+# ----------------------------------------------------------------------------
+#  Energy compensation against the walk
+# ----------------------------------------------------------------------------
+
+WALK_FILE = "walk.json"        # the walk rung's FLIPs, beside fits.json
+WALK_MARGIN = 0.05             # a +ec fit within the walk rung's FLIP + this
+
+
+def walk_rung(spec: str) -> dict | None:
+    """The walk rung of a single-scattering conductor target (``roughconductor``
+    with one ``alpha``): ``cook_torrance`` on the same microsurface (Smith's
+    G, the same D and α) with the exact conductor Fresnel, which without the
+    walk is the target, and ``multiple_scattering="walk"``: the light the
+    random walk on that microsurface reflects, every bounce (Heitz, Hanika,
+    d'Eon & Dachsbacher 2016). None for any other target."""
+    props = dict(T.parse([spec])[0].props)
+    if props["type"] != "roughconductor" or "alpha" not in props or "material" not in props:
+        return None
+    return {"type": "cook_torrance", "mode": "hdr",
+            "distribution": props.get("distribution", "beckmann"), "geometry": "smith",
+            "fresnel": "conductor", "material": props["material"],
+            "alpha": props["alpha"], "k": 0.0, "specular_reflectance": 1.0,
+            "multiple_scattering": "walk"}
+
+
+def walk_flips(specs, settings=FULL) -> dict[str, dict]:
+    """Per target of ``specs`` with a walk rung (:func:`walk_rung`): the mean
+    FLIP over the standard views, as a fit's (the same resolution, samples
+    and seed), of the walk rung's renders against the target's (``walk``:
+    what multiple scattering really adds to the material) and of the same
+    rung without the walk (``single``: the material itself, the floor of the
+    comparison)."""
+    out = {}
+    for spec in specs:
+        rung = walk_rung(spec)
+        if rung is None:
+            continue
+        reference = scene.target_views(T.parse([spec])[0], settings.res, settings.spp, seed=0)
+        row = {"properties": rung, "res": settings.res, "spp": settings.spp}
+        single = {k: v for k, v in rung.items() if k != "multiple_scattering"}
+        for name, props in (("walk", rung), ("single", single)):
+            image = scene.render_views(lambda p=props: p, settings.res, settings.spp, seed=0)
+            views = scene.view_metrics(reference, image, settings.res)
+            row[name] = statistics.fmean(v["flip"] for v in views.values())
+        out[spec] = row
+    return out
+
+
+DIRECTIONAL = tuple(f"cook_torrance/{d}/smith" for d in ("beckmann", "ggx"))   # +ec: that lobe
+WALK_CAPTION = (
+    "Energy compensation against the walk, per single-scattering conductor. The walk "
+    "rung: `cook_torrance` on the material's microsurface with its exact Fresnel and "
+    '`multiple_scattering="walk"`, against the material (FLIP; in brackets the same '
+    "rung without the walk, the comparison's floor): the light that multiple "
+    "scattering really adds. Then the fits of `cook_torrance` with Smith's G, whose "
+    "compensation is the directional lobe: FLIP without → with `energy_compensation`, "
+    f"✓ where the compensated fit is within the walk rung's FLIP + {WALK_MARGIN}. Last, "
+    "every other `+ec` fit: how many are worse than their uncompensated fit by more than "
+    f"the walk rung's FLIP + {WALK_MARGIN}.")
+
+
+def walk_table(records: list[dict], walk: dict[str, dict],
+               labels: dict[str, str] | None = None) -> str:
+    """:data:`WALK_CAPTION`'s table from the fits and :func:`walk_flips`'
+    figures; empty without them."""
+    labels = labels or {}
+    flip = {(r["target"], r["model"]): rank.quality(r) for r in rank.ok(records)}
+    specs = [s for s in dict.fromkeys(r["target"] for r in records) if s in walk]
+    if not specs:
+        return ""
+    lines = ["| material | walk rung (floor) | " + " | ".join(f"`{m}` → `{EC}`"
+                                                             for m in DIRECTIONAL)
+             + f" | other `{EC}` fits worse by more |", "|---|---|" + "---|" * len(DIRECTIONAL)
+             + "---|"]
+    for spec in specs:
+        bound = walk[spec]["walk"] + WALK_MARGIN
+        row = [labels.get(spec, spec), f"{walk[spec]['walk']:.3f} ({walk[spec]['single']:.3f})"]
+        for m in DIRECTIONAL:
+            off, on = flip.get((spec, m)), flip.get((spec, m + EC))
+            row.append("–" if off is None or on is None else
+                       f"{off:.3f} → {on:.3f} {'✓' if on <= bound else '✗'}")
+        others = [(m, flip[(spec, m)] - flip[(spec, m[:-len(EC)])]) for t, m in flip
+                  if t == spec and m.endswith(EC) and m[:-len(EC)] not in DIRECTIONAL
+                  and (spec, m[:-len(EC)]) in flip]
+        worse = [m for m, increase in others if increase > bound]
+        row.append(f"{len(worse)} of {len(others)}"
+                   + (f" ({', '.join(f'`{m}`' for m in worse)})" if worse else ""))
+        lines.append("| " + " | ".join(row) + " |")
+    return "\n" + WALK_CAPTION + "\n\n" + "\n".join(lines) + "\n"
+
+
+def read_walk(folder: str) -> dict[str, dict]:
+    """The walk rung's figures of a trade report (:data:`WALK_FILE`), or none."""
+    path = os.path.join(folder, WALK_FILE)
+    if not os.path.isfile(path):
+        return {}
+    with open(path, encoding="utf-8") as f:
+        return json.load(f)
+
+
 def rebuild(folder: str, targets=TARGETS) -> list[dict]:
     """The trade report in ``folder`` written again from its ``fits.json``,
     with no fit and no timing: the ranks, the verdicts, the Pareto plots,
     ``index.html``, ``fits.json``/``fits.csv`` in rank order and ``trade.md``,
-    as the current ranking and report writers make them (the renders, the XML
-    and the lobe slices the run drew stay as they are). The run's settings are
+    as the current ranking and report writers make them (the renders, the XML,
+    the lobe slices and the walk rung's figures the run drew stay as they are). The run's settings are
     taken to be :data:`.task.FULL`'s, as the sweep's."""
     if not os.path.isfile(os.path.join(folder, "fits.json")):
         raise ValueError(f"{folder} holds no trade sweep (no fits.json): nothing to write "
@@ -288,7 +394,7 @@ def rebuild(folder: str, targets=TARGETS) -> list[dict]:
     labels = dict((spec, label) for label, spec in targets)
     chosen = tuple((label, spec) for label, spec in targets if spec in names)
     with open(os.path.join(folder, "trade.md"), "w", encoding="utf-8") as f:
-        f.write(subset_note(chosen) + table(ordered, labels))
+        f.write(subset_note(chosen) + table(ordered, labels, read_walk(folder)))
     return ordered
 
 

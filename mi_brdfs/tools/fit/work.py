@@ -14,7 +14,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import compare
 from . import effective, metric, scene
 
 
@@ -36,12 +35,7 @@ def pairs_of(settings):
 def noise_floor(reference: dict, again: dict, res: int) -> dict:
     """FLIP and relMSE over the sphere's pixels of a second render of the
     target against the first, per view."""
-    mask = scene.sphere_mask(res)
-    out = {}
-    for view in scene.VIEWS:
-        n = compare.metrics(reference[view], again[view], flip_mode="hdr", mask=mask)
-        out[view] = {"flip": n["flip"], "relmse": n["relmse"]}
-    return out
+    return scene.view_metrics(reference, again, res)
 
 
 def prepare(target, settings) -> TargetWork:

@@ -208,20 +208,28 @@ def test_the_walk_rung_without_the_walk_is_the_conductor_it_stands_for(rng):
 
 def test_the_walk_table_marks_each_compensated_fit_against_the_walk_rung():
     """Worked by hand: the walk rung at FLIP 0.03 gives the bound 0.08; the
-    Beckmann +ec fit at 0.07 is within, the GGX one at 0.11 is not; of the
-    other +ec fits, phong's got worse by 0.10 (> 0.08), ward's by 0.02."""
-    rec = lambda model, flip: {"target": AU, "model": model, "image_flip": flip,
-                               "brdf_error": 0.1}
+    material's own (Beckmann) Smith +ec fit at 0.07 is within, and at 0.11
+    (the second material) it is not; of the other +ec fits, phong's got worse
+    by 0.10 (> 0.08), ward's by 0.02 and GGX's by 0.06."""
+    other = "roughconductor:material=Cu,alpha=0.3"
+    rec = lambda model, flip, target=AU: {"target": target, "model": model,
+                                          "image_flip": flip, "brdf_error": 0.1}
     records = [rec("cook_torrance/beckmann/smith", 0.06),
                rec("cook_torrance/beckmann/smith+ec", 0.07),
                rec("cook_torrance/ggx/smith", 0.05), rec("cook_torrance/ggx/smith+ec", 0.11),
                rec("phong", 0.50), rec("phong+ec", 0.60), rec("ward", 0.40), rec("ward+ec", 0.42),
-               rec("blinn+ec", 0.3)]                  # no uncompensated fit: not counted
-    walk = {AU: {"walk": 0.03, "single": 0.001}}
-    text = trade.walk_table(records, walk, {AU: "Au"})
-    row = next(line for line in text.splitlines() if line.startswith("| Au "))
-    cells = [c.strip() for c in row.split("|")[2:-1]]
-    assert cells == ["0.030 (0.001)", "0.060 → 0.070 ✓", "0.050 → 0.110 ✗",
-                     "1 of 2 (`phong+ec`)"]
+               rec("blinn+ec", 0.3),                  # no uncompensated fit: not counted
+               rec("cook_torrance/beckmann/smith", 0.02, other),
+               rec("cook_torrance/beckmann/smith+ec", 0.11, other)]
+    beckmann = {"distribution": "beckmann"}
+    walk = {AU: {"walk": 0.03, "single": 0.001, "properties": beckmann},
+            other: {"walk": 0.03, "single": 0.002, "properties": beckmann}}
+    text = trade.walk_table(records, walk, {AU: "Au", other: "Cu"})
+    rows = {line.split("|")[1].strip(): [c.strip() for c in line.split("|")[2:-1]]
+            for line in text.splitlines() if line.startswith("| ")}
+    assert rows["Au"] == ["0.030 (0.001)", "`cook_torrance/beckmann/smith`: 0.060 → 0.070 ✓",
+                          "1 of 3 (`phong+ec`)"]
+    assert rows["Cu"] == ["0.030 (0.002)", "`cook_torrance/beckmann/smith`: 0.020 → 0.110 ✗",
+                          "0 of 0"]
     assert trade.walk_table(records, {}) == ""
-    assert trade.table(records, {AU: "Au"}, walk).endswith(text)
+    assert trade.table(records, {AU: "Au", other: "Cu"}, walk).endswith(text)

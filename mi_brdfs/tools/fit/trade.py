@@ -315,17 +315,17 @@ def walk_flips(specs, settings=FULL) -> dict[str, dict]:
     return out
 
 
-DIRECTIONAL = tuple(f"cook_torrance/{d}/smith" for d in ("beckmann", "ggx"))   # +ec: that lobe
 WALK_CAPTION = (
     "Energy compensation against the walk, per single-scattering conductor. The walk "
     "rung: `cook_torrance` on the material's microsurface with its exact Fresnel and "
     '`multiple_scattering="walk"`, against the material (FLIP; in brackets the same '
     "rung without the walk, the comparison's floor): the light that multiple "
-    "scattering really adds. Then the fits of `cook_torrance` with Smith's G, whose "
-    "compensation is the directional lobe: FLIP without → with `energy_compensation`, "
-    f"✓ where the compensated fit is within the walk rung's FLIP + {WALK_MARGIN}. Last, "
-    "every other `+ec` fit: how many are worse than their uncompensated fit by more than "
-    f"the walk rung's FLIP + {WALK_MARGIN}.")
+    "scattering really adds. Then the fit of `cook_torrance` with Smith's G and the "
+    "material's own distribution, whose compensation is the directional lobe: FLIP "
+    "without → with `energy_compensation`, ✓ where the compensated fit is within the "
+    f"walk rung's FLIP + {WALK_MARGIN}. Last, every other `+ec` fit (the other "
+    "distribution's, and the models whose compensation is the separable lobe): how many "
+    f"are worse than their uncompensated fit by more than the walk rung's FLIP + {WALK_MARGIN}.")
 
 
 def walk_table(records: list[dict], walk: dict[str, dict],
@@ -337,19 +337,17 @@ def walk_table(records: list[dict], walk: dict[str, dict],
     specs = [s for s in dict.fromkeys(r["target"] for r in records) if s in walk]
     if not specs:
         return ""
-    lines = ["| material | walk rung (floor) | " + " | ".join(f"`{m}` → `{EC}`"
-                                                             for m in DIRECTIONAL)
-             + f" | other `{EC}` fits worse by more |", "|---|---|" + "---|" * len(DIRECTIONAL)
-             + "---|"]
+    lines = ["| material | walk rung (floor) | its D × Smith → `+ec` "
+             f"| other `{EC}` fits worse by more |", "|---|---|---|---|"]
     for spec in specs:
         bound = walk[spec]["walk"] + WALK_MARGIN
-        row = [labels.get(spec, spec), f"{walk[spec]['walk']:.3f} ({walk[spec]['single']:.3f})"]
-        for m in DIRECTIONAL:
-            off, on = flip.get((spec, m)), flip.get((spec, m + EC))
-            row.append("–" if off is None or on is None else
-                       f"{off:.3f} → {on:.3f} {'✓' if on <= bound else '✗'}")
+        own = f"cook_torrance/{walk[spec]['properties']['distribution']}/smith"
+        off, on = flip.get((spec, own)), flip.get((spec, own + EC))
+        row = [labels.get(spec, spec), f"{walk[spec]['walk']:.3f} ({walk[spec]['single']:.3f})",
+               "–" if off is None or on is None else
+               f"`{own}`: {off:.3f} → {on:.3f} {'✓' if on <= bound else '✗'}"]
         others = [(m, flip[(spec, m)] - flip[(spec, m[:-len(EC)])]) for t, m in flip
-                  if t == spec and m.endswith(EC) and m[:-len(EC)] not in DIRECTIONAL
+                  if t == spec and m.endswith(EC) and m != own + EC
                   and (spec, m[:-len(EC)]) in flip]
         worse = [m for m, increase in others if increase > bound]
         row.append(f"{len(worse)} of {len(others)}"

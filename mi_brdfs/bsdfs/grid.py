@@ -6,8 +6,9 @@ with textured parameters and are differentiable in every coordinate. An
 :class:`Axis` places its ``n`` nodes uniformly in a warped coordinate u
 (``linear``: x itself; ``sqrt``: sqrt(x), denser near ``lo``; ``log1p``:
 log(1 + x), for exponents spanning decades; ``log``: log(x), ``lo`` > 0, for a
-roughness whose features scale with it (below ``lo`` the value at ``lo``); ``ratio``: sqrt(x / (1 + x)) and
-``root``: sqrt(x) / (1 + sqrt(x)), which map [0, ∞] onto [0, 1] — sqrt near 0,
+roughness whose features scale with it (below ``lo`` the value at ``lo``);
+``ratio``: sqrt(x / (1 + x)) and ``root``: sqrt(x) / (1 + sqrt(x)), which map
+[0, ∞] onto [0, 1] — sqrt near 0,
 the last node is x = ∞, and 1 - u falls as 1/(2x) or 1/sqrt(x) towards it);
 values beyond the ends are clamped to them.
 

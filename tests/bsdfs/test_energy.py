@@ -275,8 +275,9 @@ def test_compensation_with_every_fresnel_form_matches_its_walk(distribution, nam
     default here) alike, but on Beckmann the dielectric within 5.5 % (measured
     4.98 % at α 1, 0°: 0.0011 of a 0.022 albedo) and white within 2.5 %
     (1.95 % at α 0.1, 85°). An F82 whose tint dips to 0.2 is not (18.6 %
-    directional, 25.2 % separable, at α 0.1, 80–85°): the walk's grazing bounces see the dip, the average does
-    not. python -m mi_brdfs.tools.groundtruth --reference
+    directional, 25.2 % separable, at α 0.1, 80–85°): the walk's grazing
+    bounces see the dip, the average does not. python -m
+    mi_brdfs.tools.groundtruth --reference
     tests/bsdfs/walk_reference_fresnel.json --residuals prints the directional
     figures."""
     separable, ggx, beckmann = FRESNEL_BOUNDS[name]

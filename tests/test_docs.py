@@ -385,6 +385,13 @@ def test_fit_table_is_the_committed_sweep(site):
         for r in records:                                 # each cell: FLIP · BRDF error
             row = next(row for row in rows if row.split()[0] == r["model"])
             assert f"{r['image_flip']:.2f} · {r['brdf_error']:.3f}" in row, (page, r["model"])
+    walk = committed("benchmarks", "trade", "walk.json")        # the walk rung's table
+    assert walk
+    for page in ("guide/fit.html", "results/fit.html"):
+        text = " ".join(text_of(site, page).split())
+        assert "Energy compensation against the walk" in text, page
+        for spec, row in walk.items():
+            assert f"{row['walk']:.3f} ({row['single']:.3f})" in text, (page, spec)
     caption = " ".join(text_of(site, "results/fit.html").split())
     assert "Each cell: the FLIP of the model" in caption, caption     # FLIP first, as the cells
     assert "after the dot, its BRDF error" in caption and "bold: the first-ranked fit" in caption

@@ -213,10 +213,11 @@ def result_role(name, rawtext, text, lineno, inliner, options=None, content=None
 # ----------------------------------------------------------------------------
 
 def trade_table() -> str:
-    """The Markdown table of the committed trade sweep (the sweep's own writer)."""
+    """The Markdown tables of the committed trade sweep, as its ``trade.md``
+    (the sweep's own writer), the walk rung's figures included."""
     from mi_brdfs.tools.fit import trade
     labels = {spec: label for label, spec in trade.TARGETS}
-    return trade.table(fits(), labels)
+    return trade.table(fits(), labels, trade.read_walk(str(FITS.parent)))
 
 
 class TradeTable(SphinxDirective):
@@ -225,6 +226,7 @@ class TradeTable(SphinxDirective):
 
     def run(self):
         self.env.note_dependency(str(FITS))
+        self.env.note_dependency(str(FITS.parent / "walk.json"))
         container = nodes.container(classes=["wide-table"])
         self.state.nested_parse(trade_table().splitlines(), self.content_offset, container)
         return [container]

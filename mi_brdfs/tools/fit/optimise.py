@@ -25,7 +25,10 @@ gradient never vanishes at a bound), in two stages:
    objective, their Jacobian in u by Dr.Jit's forward-mode AD, every
    coordinate within ±``U_MAX``; at most ``steps`` residual evaluations. It
    accepts only steps that lower the objective, so a start never ends worse
-   than it began; the start with the lowest objective wins.
+   than it began. Where the descent ends with a coordinate beyond
+   ±``U_START`` it starts again from there with those coordinates pulled in
+   (:func:`refine`): a coordinate driven to a bound has lost its gradient.
+   The start with the lowest objective wins.
 
 Every ``eval`` reads the parameters from opaque Dr.Jit variables: one kernel
 for all the values tried.
@@ -44,6 +47,8 @@ from ..._jit import from_numpy
 from ...bsdfs import BY_NAME
 from . import metric as metric_module, models as M
 
+RESTARTS = 3                # refine(): descents again from the end point, at most
+RESTART_GAIN = 0.01         # refine(): another one only after one lowered the objective by 1 %
 RESIDUAL_CAP = 1e3           # a non-finite residual counts as this
 TOLERANCE = 1e-10            # a relative decrease of the objective, or a step in u, this small stops
 
@@ -314,6 +319,35 @@ def levenberg_marquardt(ev: Evaluator, u0: np.ndarray, evaluations: int):
     return u, used
 
 
+def refine(ev: Evaluator, u0: np.ndarray, evaluations: int):
+    """:func:`levenberg_marquardt` from u0, then again from where it ended with
+    every coordinate pulled within ±``U_START``, while that lowers the
+    objective (at most ``RESTARTS`` times; the next only after a gain of
+    ``RESTART_GAIN``). A coordinate the descent drove to a bound has lost its
+    gradient (σ'(u) ≈ e^-|u|; in float32 σ(u) is 1 from u = 17), so it stays
+    there even where the optimum leaves the bound once another parameter
+    moves. Measured: compensated Beckmann fitted to Cu α 0.3 ended with m_S's
+    green at 1 and F0 0.75 from all three starts (relative objective 0.066,
+    the uncompensated fit 0.0089); pulled in, the descent goes on to m_S's
+    green 0.66 and F0 0.92. Returns (u, residual evaluations)."""
+    u, used = levenberg_marquardt(ev, u0, evaluations)
+    cost = float(np.sum(ev.residuals(u) ** 2))
+    for _ in range(RESTARTS):
+        pulled = np.clip(u, -M.U_START, M.U_START)
+        if np.array_equal(pulled, u) or not math.isfinite(cost):
+            break
+        trial, more = levenberg_marquardt(ev, pulled, evaluations)
+        used += more + 1
+        c_trial = float(np.sum(ev.residuals(trial) ** 2))
+        if not c_trial < cost:
+            break
+        gain = (cost - c_trial) / cost
+        u, cost = trial, c_trial
+        if gain < RESTART_GAIN:
+            break
+    return u, used
+
+
 def fit_model(model, prob: Problem, settings, log=None) -> dict:
     """Fit ``model`` (a :class:`.models.Model`) to ``prob``; returns the fitted
     properties, the BRDF error, the objective and what each start reached."""
@@ -331,7 +365,7 @@ def fit_model(model, prob: Problem, settings, log=None) -> dict:
         scanned.sort(key=lambda s: s[0] if math.isfinite(s[0]) else math.inf)
     results = []
     for _, u0 in scanned[:settings.starts]:
-        u, evaluations = levenberg_marquardt(ev, u0, settings.steps)
+        u, evaluations = refine(ev, u0, settings.steps)
         values = ev.values(u)
         results.append({"objective": relative_objective(values, prob),
                         "error": relative(values, prob), "evaluations": evaluations,

@@ -229,13 +229,20 @@ def checks(records: list[dict]) -> list[tuple[str, float | None, float | None]]:
     return out
 
 
+def compensated_pairs(records: list[dict]) -> list[tuple[str, str, float, float]]:
+    """(material, compensated model, its FLIP, the uncompensated model's
+    FLIP) of every model fitted to a material with and without energy
+    compensation (:func:`.rank.quality`; failed fits left out)."""
+    flip = {(r["target"], r["model"]): rank.quality(r) for r in rank.ok(records)}
+    return [(t, m, flip[(t, m)], flip[(t, m[:-len(EC)])]) for t, m in flip
+            if m.endswith(EC) and (t, m[:-len(EC)]) in flip]
+
+
 def compensation_effect(records: list[dict]) -> tuple[int, int, int]:
     """Over the (material, model) pairs fitted both with and without energy
     compensation: in how many the compensated fit's FLIP is worse by more
     than :data:`.rank.TIE_FLIP`, in how many better by more, of how many."""
-    flip = {(r["target"], r["model"]): rank.quality(r) for r in rank.ok(records)}
-    pairs = [(flip[(t, m)], flip[(t, m[:-len(EC)])]) for t, m in flip
-             if m.endswith(EC) and (t, m[:-len(EC)]) in flip]
+    pairs = [(on, off) for _, _, on, off in compensated_pairs(records)]
     worse = sum(a > b + rank.TIE_FLIP for a, b in pairs)
     better = sum(a < b - rank.TIE_FLIP for a, b in pairs)
     return worse, better, len(pairs)
@@ -333,7 +340,7 @@ def walk_table(records: list[dict], walk: dict[str, dict],
     """:data:`WALK_CAPTION`'s table from the fits and :func:`walk_flips`'
     figures; empty without them."""
     labels = labels or {}
-    flip = {(r["target"], r["model"]): rank.quality(r) for r in rank.ok(records)}
+    pairs = compensated_pairs(records)
     specs = [s for s in dict.fromkeys(r["target"] for r in records) if s in walk]
     if not specs:
         return ""
@@ -342,13 +349,11 @@ def walk_table(records: list[dict], walk: dict[str, dict],
     for spec in specs:
         bound = walk[spec]["walk"] + WALK_MARGIN
         own = f"cook_torrance/{walk[spec]['properties']['distribution']}/smith"
-        off, on = flip.get((spec, own)), flip.get((spec, own + EC))
+        mine = [(on, off) for t, m, on, off in pairs if t == spec and m == own + EC]
         row = [labels.get(spec, spec), f"{walk[spec]['walk']:.3f} ({walk[spec]['single']:.3f})",
-               "–" if off is None or on is None else
-               f"`{own}`: {off:.3f} → {on:.3f} {'✓' if on <= bound else '✗'}"]
-        others = [(m, flip[(spec, m)] - flip[(spec, m[:-len(EC)])]) for t, m in flip
-                  if t == spec and m.endswith(EC) and m != own + EC
-                  and (spec, m[:-len(EC)]) in flip]
+               "–" if not mine else
+               f"`{own}`: {mine[0][1]:.3f} → {mine[0][0]:.3f} {'✓' if mine[0][0] <= bound else '✗'}"]
+        others = [(m, on - off) for t, m, on, off in pairs if t == spec and m != own + EC]
         worse = [m for m, increase in others if increase > bound]
         row.append(f"{len(worse)} of {len(others)}"
                    + (f" ({', '.join(f'`{m}`' for m in worse)})" if worse else ""))

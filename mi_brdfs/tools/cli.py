@@ -221,7 +221,7 @@ COMPARE_LIMITS = {
 # bench's groups in their order (bench.groups.GROUPS, which needs the reports
 # extra to import: the parser of every command must not)
 BENCH_GROUPS = ("builtin", "models", "oren_nayar", "sampling", "integrators", "convergence",
-                "scaling", "lobes", "energy", "ladder", "materials", "frozen", "kernels",
+                "scaling", "lobes", "energy", "ladder", "walk", "materials", "frozen", "kernels",
                 "tracing", "explore", "trade", "fit")
 
 

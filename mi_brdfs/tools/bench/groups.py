@@ -260,6 +260,26 @@ def ladder(s: Settings, refs: References, out_dir: str) -> list[dict]:
     return rows
 
 
+def walk(s: Settings, refs: References) -> list[dict]:
+    """The ladder's rungs in the bundled scenes (tools/bench/ladder.py): each
+    cook_torrance of a GGX or Beckmann D in the cook_torrance and course
+    scenes, path traced (HDR), given Smith's G and single scattering, the
+    directional energy-compensation lobe, then the random walk in the
+    renderer (Blinn's D, which the walk does not take, as it is), at the
+    scenes' own pixels and samples (quick: the bench's). Per rung:
+    the median render time (the scene the only one alive), the noise
+    (expected relMSE of one render against its own mean, weighed by the
+    walk's mean for every rung), the light reflected to the camera over the
+    walk's, and the time, noise and time to the same noise over the
+    directional lobe's."""
+    own = s is FULL
+    rows = []
+    for name, _ in rungs.SCENES:
+        rows += rungs.measure_scene(name, None if own else s.res, None if own else s.spp,
+                                    s.repeats)
+    return rows
+
+
 # ----------------------------------------------------------------------------
 #  In processes of their own (workers.py)
 # ----------------------------------------------------------------------------
@@ -464,6 +484,7 @@ GROUPS: dict[str, Group] = {g.name: g for g in [
     Group("lobes", lobes, report.lobes, plots.lobes),
     Group("energy", energy, report.energy),
     Group("ladder", ladder, report.ladder, writes=True, drawn=plots.LADDER),
+    Group("walk", walk, report.walk),
     Group("materials", materials, report.materials, plots.materials),
     Group("frozen", frozen, report.frozen, plots.frozen),
     Group("kernels", kernels, report.kernels, plots.kernels),

@@ -28,6 +28,10 @@ differ most (issue 36).
 The sphere and camera are the fit's standard views' (:mod:`..fit.scene`):
 direct light only (a convex object receives nothing else), the emitters
 hidden, and the errors taken over the sphere's pixels (:func:`..fit.scene.sphere_mask`).
+
+The bench group ``walk`` (:func:`measure_scene`) puts the rungs of
+:data:`SCENE_RUNGS` in the bundled scenes of :data:`SCENES` instead, each
+``cook_torrance`` the walk takes changed in the scene's XML (:func:`scene_xml`).
 """
 from __future__ import annotations
 
@@ -132,3 +136,86 @@ def measure(material: str, lighting: str, rung: str, res: int, spp: int, repeats
            "flip_mean": masked_flip(truth, mean, "hdr", ~on)[0],
            "light_vs_walk": float(mean[on].sum() / truth[on].sum())}
     return Case(row, mean)
+
+
+# ----------------------------------------------------------------------------
+#  The rungs in the bundled scenes
+# ----------------------------------------------------------------------------
+
+# The bundled scenes with a cook_torrance the walk can stand for, and the
+# parameters (-D) they are rendered with: path traced (HDR), as a user renders them.
+SCENES: list[tuple[str, dict]] = [
+    ("cook_torrance", {"mode": "hdr"}),
+    ("course", {"mode": "hdr"}),
+]
+SCENE_RUNGS = ("single", "directional", "walk")
+WALKABLE = ("ggx", "beckmann")     # the D the walk and the directional lobe are for
+
+
+def scene_xml(name: str, rung: str) -> tuple[str, int]:
+    """The bundled scene ``name``'s XML with each ``cook_torrance`` of a GGX or
+    Beckmann D given Smith's G and ``rung``'s options (the others, Blinn's D,
+    as they are); and how many BSDFs were changed."""
+    import xml.etree.ElementTree as ET
+    from ... import scenes
+    root = ET.parse(scenes.path(name)).getroot()
+    options = {"geometry": "smith", **dict(RUNGS)[rung]}
+    changed = 0
+    for bsdf in root.iter("bsdf"):
+        if bsdf.get("type") != "cook_torrance":
+            continue
+        named = {child.get("name"): child for child in bsdf}
+        distribution = named["distribution"].get("value") if "distribution" in named else "beckmann"
+        if distribution not in WALKABLE:
+            continue
+        for key, value in options.items():
+            if key in named:
+                bsdf.remove(named[key])
+            tag = "boolean" if isinstance(value, bool) else "string"
+            ET.SubElement(bsdf, tag, name=key, value=str(value).lower() if tag == "boolean"
+                          else str(value))
+        changed += 1
+    return ET.tostring(root, encoding="unicode"), changed
+
+
+def measure_scene(name: str, res: int | None, spp: int | None, repeats: int) -> list[dict]:
+    """Each rung of :data:`SCENE_RUNGS` in the bundled scene ``name`` (at
+    ``res`` pixels across and ``spp``, or the scene's own where None): rendered
+    once to compile, then ``repeats`` times (seeds 1, 2, ...), the scene the
+    only one alive. Per rung: the median render time; the noise, the
+    expected relMSE of one render against its own expectation (the per-pixel
+    variance over the renders, weighed by the walk's mean as relMSE weighs a
+    render: (mean + 0.01)², the same weight for every rung); the light
+    reflected to the camera (the image's sum) over the walk's; and the
+    time, the noise and the time to the same noise (time × noise) over the
+    directional lobe's."""
+    defines = dict(SCENES)[name] | {k: str(v) for k, v in (("res", res), ("spp", spp))
+                                    if v is not None}
+    stacks, rows = {}, []
+    for rung in SCENE_RUNGS:
+        text, changed = scene_xml(name, rung)
+        scene = mi.load_string(text, parallel=False, **defines)
+        res = scene.sensors()[0].film().size()[0]
+        spp = scene.sensors()[0].sampler().sample_count()
+        images, seconds = [], []
+        for seed in range(repeats + 1):           # seed 0 compiles
+            start = time.perf_counter()
+            images.append(views.render(scene, spp, seed))
+            seconds.append(time.perf_counter() - start)
+        del scene
+        views.release()
+        stacks[rung] = np.stack(images[1:])
+        rows.append({"scene": name, "rung": rung, "bsdfs": changed, "res": res, "spp": spp,
+                     "median_s": statistics.median(seconds[1:])})
+    walk = stacks["walk"].mean(axis=0)
+    weight = 1.0 / (walk + 0.01) ** 2
+    for row in rows:
+        stack = stacks[row["rung"]]
+        row["noise_relmse"] = float(np.mean(stack.var(axis=0, ddof=1) * weight))
+        row["light_vs_walk"] = float(stack.mean(axis=0).sum() / walk.sum())
+    at = {row["rung"]: row for row in rows}
+    for row in rows:
+        row["time_vs_directional"] = row["median_s"] / at["directional"]["median_s"]
+        row["noise_vs_directional"] = row["noise_relmse"] / at["directional"]["noise_relmse"]
+        row["time_to_noise_vs_directional"] = row["time_vs_directional"] * row["noise_vs_directional"]
+    return rows

@@ -133,6 +133,24 @@ def ladder(rows: list[dict]) -> str:
                                    for rung in rungs[1:]) + ".")
 
 
+def walk(rows: list[dict]) -> str:
+    """Per bundled scene, the walk's time, noise and time to the same noise
+    over the directional lobe's, and single scattering's light over the walk's."""
+    parts = []
+    for name in dict.fromkeys(r["scene"] for r in rows):
+        at = {r["rung"]: r for r in rows if r["scene"] == name}
+        w, single = at["walk"], at["single"]
+        parts.append(f"{name} ({w['bsdfs']} cook_torrance): the walk {w['time_vs_directional']:.2f}x "
+                     f"the time, {w['noise_vs_directional']:.2f}x the noise, "
+                     f"{w['time_to_noise_vs_directional']:.2f}x the time to the same noise; "
+                     f"the directional lobe's light {at['directional']['light_vs_walk']:.4f} of "
+                     f"the walk's, single scattering's {single['light_vs_walk']:.4f}")
+    sizes = ", ".join(f"{r['scene']} {r['res']} pixels across, {r['spp']} spp"
+                      for r in rows if r["rung"] == "walk")
+    return (f"The walk against the directional lobe in the bundled scenes (HDR; {sizes}): "
+            + "; ".join(parts) + ".")
+
+
 def materials(rows: list[dict]) -> str:
     """Plugin vs built-in at the largest number of materials, beside the floor
     (a bare Python BSDF), and the tracing cost per material (slope of the warm
@@ -252,6 +270,7 @@ TITLES = {
     "lobes": "A lobe switched off costs nothing",
     "energy": "What energy compensation costs",
     "ladder": "The multiple-scattering ladder",
+    "walk": "The walk in the bundled scenes",
     "materials": "Many materials in one scene",
     "frozen": "Frozen passes",
     "kernels": "The BSDF methods' kernels",
@@ -304,6 +323,10 @@ HEADERS = {
     "flip_mean": "FLIP of the renders' mean",
     "light_vs_walk": "light over the walk's",
     "time_vs_single": "time over single scattering's",
+    "bsdfs": "Cook-Torrance BSDFs on the rung",
+    "time_vs_directional": "time over the directional lobe's",
+    "noise_vs_directional": "noise over the directional lobe's",
+    "time_to_noise_vs_directional": "time to the same noise over the directional lobe's",
 }
 WORDS = {"builtin": "built-in", "first": "first render", "warm": "warm render",
          "peak": "peak memory", "relmse": "relMSE", "vs": "over",

@@ -758,3 +758,25 @@ def test_the_energy_guides_ladder_tables_are_the_committed_run(site):
             assert f"{r['flip_mean']:.3f}, {r['light_vs_walk']:.3f}" in found[0], (case, rung)
             noise = f"{r['noise_relmse'] * 1e3:.2g}"
             assert f"{r['time_vs_single']:.2f}×, {noise}" in found[1], (case, rung, noise)
+
+
+def test_the_energy_guides_bundled_scene_table_is_the_committed_run(site):
+    """The energy guide's table of the walk in the bundled scenes is the
+    bench's committed walk rows: per scene its pixels and samples, the single
+    and walk rungs' time over the directional lobe's, each rung's noise
+    (10⁻³, two significant digits) and the light over the walk's."""
+    rows = committed("benchmarks", "results.json")["groups"]["walk"]
+    text = read(site, "guide/energy.html")
+    lines = [plain(row) for row in re.findall(r"<tr[^>]*>(.*?)</tr>", text, re.S)]
+    for scene in dict.fromkeys(r["scene"] for r in rows):
+        at = {r["rung"]: r for r in rows if r["scene"] == scene}
+        found = [line for line in lines if line.split()[0] == scene]
+        assert len(found) == 1, (scene, found)
+        line = found[0]
+        assert f"{at['walk']['res']}², {at['walk']['spp']}" in line, line
+        assert (f"{at['single']['time_vs_directional']:.2f}×, "
+                f"{at['walk']['time_vs_directional']:.2f}×") in line, line
+        noise = ", ".join(f"{at[r]['noise_relmse'] * 1e3:.2g}" for r in ("single", "directional", "walk"))
+        assert noise in line, (line, noise)
+        assert (f"{at['single']['light_vs_walk']:.4f}, "
+                f"{at['directional']['light_vs_walk']:.4f}") in line, line

@@ -102,6 +102,17 @@ def reference(material: str, lighting: str, res: int, refs: References) -> np.nd
     return image
 
 
+def timed_renders(scene, spp: int, repeats: int) -> tuple[list[np.ndarray], list[float]]:
+    """``scene`` rendered once to compile (seed 0), then ``repeats`` times at
+    ``spp`` (seeds 1, 2, ...): those renders and their times (s)."""
+    images, seconds = [], []
+    for seed in range(repeats + 1):
+        start = time.perf_counter()
+        images.append(views.render(scene, spp, seed))
+        seconds.append(time.perf_counter() - start)
+    return images[1:], seconds[1:]
+
+
 def measure(material: str, lighting: str, rung: str, res: int, spp: int, repeats: int,
             truth: np.ndarray) -> Case:
     """Render ``rung`` of ``material`` in ``lighting`` once to compile, then
@@ -116,12 +127,7 @@ def measure(material: str, lighting: str, rung: str, res: int, spp: int, repeats
     wrong, less its noise); and the light it reflects towards the camera, the
     sum of that mean over the sphere's pixels, against the walk's."""
     scene = mi.load_dict(scene_dict(bsdf(material, rung), res, lighting), parallel=False)
-    images, seconds = [], []
-    for seed in range(repeats + 1):               # seed 0 compiles
-        start = time.perf_counter()
-        images.append(views.render(scene, spp, seed))
-        seconds.append(time.perf_counter() - start)
-    images, seconds = images[1:], seconds[1:]
+    images, seconds = timed_renders(scene, spp, repeats)
     del scene
     views.release()
     stack = np.stack(images)
@@ -197,16 +203,12 @@ def measure_scene(name: str, res: int | None, spp: int | None, repeats: int) -> 
         scene = mi.load_string(text, parallel=False, **defines)
         res = scene.sensors()[0].film().size()[0]
         spp = scene.sensors()[0].sampler().sample_count()
-        images, seconds = [], []
-        for seed in range(repeats + 1):           # seed 0 compiles
-            start = time.perf_counter()
-            images.append(views.render(scene, spp, seed))
-            seconds.append(time.perf_counter() - start)
+        images, seconds = timed_renders(scene, spp, repeats)
         del scene
         views.release()
-        stacks[rung] = np.stack(images[1:])
+        stacks[rung] = np.stack(images)
         rows.append({"scene": name, "rung": rung, "bsdfs": changed, "res": res, "spp": spp,
-                     "median_s": statistics.median(seconds[1:])})
+                     "median_s": statistics.median(seconds)})
     walk = stacks["walk"].mean(axis=0)
     weight = 1.0 / (walk + 0.01) ** 2
     for row in rows:

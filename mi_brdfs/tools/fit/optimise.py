@@ -277,7 +277,7 @@ def candidates(ev: Evaluator, count: int) -> list[dict]:
 def bounded_least_squares(a: np.ndarray, b: np.ndarray, w: np.ndarray, bounds) -> np.ndarray:
     """argmin Σ w (a x - b)² with lo <= x <= hi, exactly. The objective is a
     convex quadratic ½xᵀHx - gᵀx + const (H = aᵀWa, g = aᵀWb; a small ridge
-    where a column is 0), and a model has a few colours (n <= 4), so the
+    where a column is 0), and a model has a few colours (n <= 4: toon's), so the
     minimum is found by trying every active set: each unknown free (its
     gradient component 0) or on one of its bounds, 3ⁿ small solves; the
     minimum is the lowest of those within the bounds. (scipy's iterative
@@ -351,7 +351,7 @@ def refine(ev: Evaluator, u: np.ndarray, evaluations: int):
     the uncompensated fit 0.0089); pulled in, the descent goes on to m_S's
     green 0.66 and F0 0.92 (0.014). Only the best start's end is refined: a
     start that stopped at a bound most often went back to it (k or a diffuse
-    channel at 0), and refining all three was a sixth of a fit's time (gold
+    channel at 0), and refining all three was a fifth of a fit's time (gold
     α 0.1's 24 models: 91 restarts, 163 descents). Returns (u, residual
     evaluations)."""
     cost, used = float(np.sum(ev.residuals(u) ** 2)), 1

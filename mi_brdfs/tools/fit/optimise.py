@@ -281,7 +281,7 @@ def bounded_least_squares(a: np.ndarray, b: np.ndarray, w: np.ndarray, bounds) -
     minimum is found by trying every active set: each unknown free (its
     gradient component 0) or on one of its bounds, 3ⁿ small solves; the
     minimum is the lowest of those within the bounds. (scipy's iterative
-    lsq_linear did this in a third of a fit's scan.)"""
+    lsq_linear took half the scan's time.)"""
     h = np.einsum("ni,n,nj->ij", a, w, a)       # einsum, not BLAS: see gram()
     g = np.einsum("ni,n->i", a, w * b)
     h = h + np.eye(len(h)) * (1e-12 * max(float(np.trace(h)), 1e-300))
@@ -351,8 +351,8 @@ def refine(ev: Evaluator, u: np.ndarray, evaluations: int):
     the uncompensated fit 0.0089); pulled in, the descent goes on to m_S's
     green 0.66 and F0 0.92 (0.014). Only the best start's end is refined: a
     start that stopped at a bound most often went back to it (k or a diffuse
-    channel at 0), and refining all three was a fifth of a fit's time (gold
-    α 0.1's 24 models: 91 restarts, 163 descents). Returns (u, residual
+    channel at 0), and refining all three took a third of the optimiser's
+    time (gold α 0.1's 24 models: 91 restarts, 163 descents). Returns (u, residual
     evaluations)."""
     cost, used = float(np.sum(ev.residuals(u) ** 2)), 1
     for _ in range(RESTARTS):
@@ -411,7 +411,8 @@ def scan(ev: Evaluator, count: int) -> list[tuple[float, np.ndarray]]:
 
 def fit_model(model, prob: Problem, settings, log=None) -> dict:
     """Fit ``model`` (a :class:`.models.Model`) to ``prob``; returns the fitted
-    properties, the BRDF error, the objective and what each start reached."""
+    properties, the BRDF error, the objective, what each start's descent
+    reached and what the winner's refinement did."""
     ev = Evaluator(model, prob)
     scanned = scan(ev, settings.scan)
 

@@ -286,7 +286,7 @@ def bounded_least_squares(a: np.ndarray, b: np.ndarray, w: np.ndarray, bounds) -
     g = np.einsum("ni,n->i", a, w * b)
     h = h + np.eye(len(h)) * (1e-12 * max(float(np.trace(h)), 1e-300))
     lo, hi = (np.asarray(x, dtype=np.float64) for x in bounds)
-    best, best_q = np.clip(np.zeros(len(g)), lo, hi), math.inf
+    best, best_q = None, math.inf     # every unknown on a bound is always within them
     for state in itertools.product((0, 1, 2), repeat=len(g)):     # free, at lo, at hi
         state = np.array(state)
         x = np.where(state == 1, lo, hi)

@@ -77,6 +77,28 @@ def test_parallel_loading_gives_the_same_render_as_serial_loading():
     np.testing.assert_array_equal(images[2], images[1])
 
 
+def test_a_settled_worker_still_frees_what_its_tasks_leave_behind():
+    """scene.settle (a fit worker's first task) puts the imports out of the
+    collector's reach, so its collections walk a small heap; a BSDF held in a
+    reference cycle made afterwards is still freed by scene.release (else
+    every fitted model would stay alive and be traced at every render). In a
+    fresh process: the freeze is for the life of the process."""
+    script = ("import gc, weakref, mitsuba as mi; mi.set_variant('llvm_ad_rgb');"
+              "import mi_brdfs; mi_brdfs.register();"
+              "from mi_brdfs.tools.fit import scene;"
+              "scene.settle();"
+              "Cycle = type('Cycle', (), {});"
+              "c = Cycle(); c.me = c; c.bsdf = mi.load_dict({'type': 'phong'});"
+              "gone = weakref.ref(c); del c;"
+              "before = gone() is not None; scene.release();"
+              "print(gc.get_freeze_count(), len(gc.get_objects()), before, gone() is None)")
+    out = subprocess.run([sys.executable, "-c", script], check=True, capture_output=True,
+                         text=True, env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+    frozen, tracked, alive_before, freed = out.stdout.split()
+    assert int(frozen) > 10 * int(tracked), (frozen, tracked)
+    assert (alive_before, freed) == ("True", "True")
+
+
 def test_progress_lines_count_models_per_phase_with_the_time_left():
     """In a log (not a terminal): one line per finished model with its
     summary, then "LABEL (fitted): done/total models, elapsed, ETA left";

@@ -93,6 +93,7 @@ def _fit_and_measure(target, model, settings: Settings, work) -> dict:
     if mi.variant() != "llvm_ad_rgb":
         mi.set_variant("llvm_ad_rgb")
         mi_brdfs.register()
+        scene.settle()                       # the worker's first task: the imports are done
     start = time.perf_counter()
     if work is None:
         work = prepare(target, settings)

@@ -157,9 +157,16 @@ def metal_starts(alpha: float) -> list[dict]:
     if key not in _METALS:
         si = dr.zeros(mi.SurfaceInteraction3f)
         found = []
-        for name in ct.materials():
-            eta, kappa = (np.array(t.eval(si), dtype=np.float64).ravel()
-                          for t in ct.material_textures(name))
+        level = mi.log_level()
+        # Mitsuba warns when a metal's spectra reduce to a colour out of its gamut (it
+        # clamps it): about metals the user did not name, so not shown (the clamp stays)
+        mi.set_log_level(mi.LogLevel.Error)
+        try:
+            textures = {name: ct.material_textures(name) for name in ct.materials()}
+        finally:
+            mi.set_log_level(level)
+        for name, pair in textures.items():
+            eta, kappa = (np.array(t.eval(si), dtype=np.float64).ravel() for t in pair)
             if len(eta) == 3 and np.isfinite(eta).all() and np.isfinite(kappa).all():
                 found.append({"eta": [float(min(max(v, ETA_RANGE[0]), ETA_RANGE[1])) for v in eta],
                               "kappa": [float(min(max(v, KAPPA_RANGE[0]), KAPPA_RANGE[1]))

@@ -119,11 +119,14 @@ def test_the_logistic_is_a_bijection_onto_each_range():
 
 
 def test_a_descent_stuck_at_a_bound_goes_on_from_it():
-    """Compensated Beckmann fitted to Cu α 0.3: two of the three starts stop
-    with a colour channel driven to 1 (relative objective 0.066 and 0.093;
-    the third 0.014). Refined from either, the descent must reach the third's
-    objective; the fit must too, and stay within 2x of the uncompensated
-    one's (the target has no multiple scattering to match)."""
+    """Compensated Beckmann fitted to Cu α 0.3: the starts' descents stop with
+    colour channels driven to a bound, where the logistic has no slope left,
+    one of them well above the best (relative objective 0.093 against 0.014
+    on the machine this was written on; 0.0086 against 0.0043 on an AVX-512
+    one, where the trajectories differ by rounding). Refined from the worst,
+    the descent must reach at least the best start's objective (it does not
+    with RESTARTS = 0); so must the fit, and stay within 2x of the
+    uncompensated one's (the target has no multiple scattering to match)."""
     prob = optimise.problem(targets.parse(["roughconductor:material=Cu,alpha=0.3"])[0].load(),
                             pairs(), SETTINGS.objective)
     fits = {name: optimise.fit_model(models.select([name])[0], prob, SETTINGS)
@@ -133,12 +136,12 @@ def test_a_descent_stuck_at_a_bound_goes_on_from_it():
     cost = lambda u: float(np.sum(ev.residuals(u) ** 2))
     ends = [optimise.levenberg_marquardt(ev, u0, SETTINGS.steps)[0]
             for _, u0 in optimise.scan(ev, SETTINGS.scan)[:SETTINGS.starts]]
-    best = min(cost(u) for u in ends)
-    stuck = [u for u in ends if cost(u) > 3 * best]
-    assert stuck, [cost(u) for u in ends]
-    for u in stuck:
-        assert cost(optimise.refine(ev, u, SETTINGS.steps)[0]) == pytest.approx(best, rel=2e-3)
-    assert fits[model.name]["objective"] ** 2 == pytest.approx(best, rel=2e-3)
+    costs = [cost(u) for u in ends]
+    best, worst = min(costs), max(costs)
+    assert worst > 1.5 * best, costs                 # a start stuck well above the others
+    refined = cost(optimise.refine(ev, ends[costs.index(worst)], SETTINGS.steps)[0])
+    assert refined <= best * (1 + 2e-3), (refined, costs)
+    assert fits[model.name]["objective"] ** 2 <= best * (1 + 2e-3)
     assert fits["cook_torrance/beckmann/smith+ec"]["objective"] < \
         2 * fits["cook_torrance/beckmann/smith"]["objective"]
     # the diffuse lobe the restarts can leave at a weight of 1e-6 (HDR-FLIP sees

@@ -505,6 +505,57 @@ def test_roughness_derivative_matches_the_smooth_truth(config, key, alpha, textu
         np.abs(ad - fd) / np.abs(fd)
 
 
+# ----------------------------------------------------------------------------
+#  Constant parameters contracted offline (compensation.Specialised)
+# ----------------------------------------------------------------------------
+
+@pytest.mark.parametrize("smooth", [False, True])
+def test_contracting_an_axis_weighs_its_stencil_and_keeps_a_symmetry(smooth):
+    """compensation._contract along one axis against a NumPy transcription
+    (the sum over the axis's stencil of weight times slice, and of the
+    derivative weights), at the ends and between nodes; a table symmetric in
+    its first two axes (as the directional lobe's in μ_i, μ_o) stays exactly so."""
+    from mi_brdfs.bsdfs.grid import Axis
+    axis = Axis("alpha", 0.05, 2.0, 7, warp="log", smooth=smooth)
+    r = np.random.default_rng(5).random((5, 5, 3, axis.n + (2 if smooth else 0)))
+    a = r + r.transpose(1, 0, 2, 3)
+    for x in (0.05, 0.3, 1.7, 2.0):
+        value, slope = compensation._contract([a], 3, axis, x)
+        i, w, dw = axis.stencil(x)
+        np.testing.assert_allclose(value, np.einsum("j,abcj->abc", w, a[..., i:i + len(w)]),
+                                   rtol=1e-13)
+        np.testing.assert_allclose(slope, np.einsum("j,abcj->abc", dw, a[..., i:i + len(w)]),
+                                   rtol=1e-12, atol=1e-12 * np.abs(slope).max())
+        assert np.array_equal(value, value.swapaxes(0, 1))
+
+
+@pytest.mark.parametrize("compensation_kind", ["separable", "directional"])
+def test_a_plugin_back_at_earlier_constants_reads_as_a_fresh_one(compensation_kind, monkeypatch):
+    """A table keeps its last SPECIALISED_KEPT specialisations and hands them
+    out again (a fit's updates return to the same α and F0 often). A plugin
+    updated away and straight back (a kept one), or through more roughnesses
+    than are kept and back (rebuilt), evaluates exactly as one loaded there."""
+    wi, wo = direction_pairs()
+    config = cook_torrance("ggx", alpha=0.3, f0=0.7, compensation=compensation_kind)
+    fresh = np.array(mi.load_dict(config).eval(mi.BSDFContext(), surface(wi), vec(wo)))
+    bsdf = mi.load_dict(config)
+    params = mi.traverse(bsdf)
+    for path in ([0.31], [0.3 + 0.01 * k for k in range(1, compensation.SPECIALISED_KEPT + 3)]):
+        for alpha in path + [0.3]:
+            params["alpha.value"] = alpha
+            params.update()
+        again = np.array(bsdf.eval(mi.BSDFContext(), surface(wi), vec(wo)))
+        assert np.array_equal(again, fresh), np.abs(again - fresh).max()
+    made = []                                  # the keeping alone, on an empty table
+    monkeypatch.setattr(compensation, "Specialised", lambda t, key: made.append(key) or object())
+    table = compensation.Table.__new__(compensation.Table)
+    first = table.specialise((0.3, 0.7))
+    assert table.specialise((0.3, 0.7)) is first and made == [(0.3, 0.7)]
+    for k in range(compensation.SPECIALISED_KEPT):
+        table.specialise((0.4 + 0.01 * k, 0.7))
+    assert table.specialise((0.3, 0.7)) is not first and made.count((0.3, 0.7)) == 2
+
+
 @pytest.mark.parametrize("config, axis, textured", [
     (cook_torrance("ggx", **SEPARABLE), "alpha", False),
     (cook_torrance("ggx", **SEPARABLE), "alpha", True),

@@ -9,6 +9,9 @@ from __future__ import annotations
 
 import contextlib
 import math
+import os
+import subprocess
+import sys
 
 import numpy as np
 
@@ -16,6 +19,24 @@ import mi_brdfs  # noqa: F401  (LLVM set-up, variant, plugin registration)
 import drjit as dr
 import mitsuba as mi
 from mi_brdfs._jit import from_numpy
+
+# ----------------------------------------------------------------------------
+#  A fresh process
+# ----------------------------------------------------------------------------
+
+FRESH_START = ("import mitsuba as mi; mi.set_variant('llvm_ad_rgb');"
+               "import mi_brdfs; mi_brdfs.register();")
+
+
+def fresh_python(script: str, *args: str) -> subprocess.CompletedProcess:
+    """``script`` (one line, ``;``-separated) run with ``args`` by a new Python
+    process on this one's path, after FRESH_START; its output captured as text,
+    the test failed if it fails. For what lasts a process's life (the garbage
+    collector's freeze, state read once per process)."""
+    return subprocess.run([sys.executable, "-c", FRESH_START + script, *args], check=True,
+                          capture_output=True, text=True,
+                          env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+
 
 # ----------------------------------------------------------------------------
 #  Directions and evaluation

@@ -14,7 +14,7 @@ import mitsuba as mi
 from mi_brdfs.bsdfs import BY_NAME
 
 from mi_brdfs.tools.fit import effective, metric, models, optimise, targets, task, trade
-from support import random_hemisphere, surface, vec
+from support import fresh_python, random_hemisphere, surface, vec
 
 SETTINGS = task.QUICK.replace(render=False)
 AU = "roughconductor:material=Au,alpha=0.3"
@@ -121,17 +121,10 @@ def test_the_metals_the_conductor_rung_starts_from_are_read_without_warnings():
     printed Mitsuba's out-of-gamut warnings about metals nobody named (28 lines
     a fit of gold); they are kept out, and the log level is restored. In a fresh
     process: the starts are read once per process."""
-    import os
-    import subprocess
-    import sys
-    script = ("import mitsuba as mi; mi.set_variant('llvm_ad_rgb');"
-              "import mi_brdfs; mi_brdfs.register();"
-              "from mi_brdfs.tools.fit import models;"
-              "starts = models.metal_starts(0.2);"
-              "print(len(starts), mi.log_level() == mi.LogLevel.Warn,"
-              " min(min(s['eta'] + s['kappa']) for s in starts) >= 0)")
-    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
-                         check=True, env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+    out = fresh_python("from mi_brdfs.tools.fit import models;"
+                       "starts = models.metal_starts(0.2);"
+                       "print(len(starts), mi.log_level() == mi.LogLevel.Warn,"
+                       " min(min(s['eta'] + s['kappa']) for s in starts) >= 0)")
     assert "WARN" not in out.stderr + out.stdout, out.stdout
     count, level_back, clamped = out.stdout.split()
     assert int(count) > 20 and level_back == "True" and clamped == "True"

@@ -2,9 +2,6 @@
 and handed to every task (counted), the tasks given it record what they
 record without it, the progress lines read as documented."""
 import io
-import os
-import subprocess
-import sys
 import tempfile
 from pathlib import Path
 
@@ -12,6 +9,7 @@ import numpy as np
 import pytest
 
 from mi_brdfs.tools.fit import models, scene, sweep, targets, task, work
+from support import fresh_python
 
 TINY = task.QUICK.replace(viewers=(4, 2), uniform=(4, 4), lobe=4, scan=2, starts=1, steps=0,
                           res=24, spp=4, cost=False)
@@ -61,16 +59,14 @@ def test_parallel_loading_gives_the_same_render_as_serial_loading():
     the same either way, in fresh processes (a corrupted object shows as an
     error or another image). The project's commands still load serially: see
     the comment in tools/render.py."""
-    script = ("import sys, numpy as np, mitsuba as mi; mi.set_variant('llvm_ad_rgb');"
-              "import mi_brdfs; mi_brdfs.register();"
+    script = ("import sys, numpy as np;"
               f"s = mi.load_file({str(SCENES / 'course.xml')!r}, parallel=sys.argv[1] == '1',"
               " mode='hdr', res='24');"
               "np.save(sys.argv[2], np.array(mi.render(s, spp=4, seed=3)))")
     images = []
     for i, parallel in enumerate(("1", "0", "1")):
         out = Path(tempfile.mkdtemp()) / f"{i}.npy"
-        subprocess.run([sys.executable, "-c", script, parallel, str(out)], check=True,
-                       env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+        fresh_python(script, parallel, str(out))
         images.append(np.load(out))
     assert images[0].shape == (24, 24, 3) and images[0].max() > 0
     np.testing.assert_array_equal(images[0], images[1])
@@ -83,8 +79,7 @@ def test_a_settled_worker_still_frees_what_its_tasks_leave_behind():
     reference cycle made afterwards is still freed by scene.release (else
     every fitted model would stay alive and be traced at every render). In a
     fresh process: the freeze is for the life of the process."""
-    script = ("import gc, weakref, mitsuba as mi; mi.set_variant('llvm_ad_rgb');"
-              "import mi_brdfs; mi_brdfs.register();"
+    script = ("import gc, weakref;"
               "from mi_brdfs.tools.fit import scene;"
               "scene.settle();"
               "Cycle = type('Cycle', (), {});"
@@ -92,9 +87,7 @@ def test_a_settled_worker_still_frees_what_its_tasks_leave_behind():
               "gone = weakref.ref(c); del c;"
               "before = gone() is not None; scene.release();"
               "print(gc.get_freeze_count(), len(gc.get_objects()), before, gone() is None)")
-    out = subprocess.run([sys.executable, "-c", script], check=True, capture_output=True,
-                         text=True, env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
-    frozen, tracked, alive_before, freed = out.stdout.split()
+    frozen, tracked, alive_before, freed = fresh_python(script).stdout.split()
     assert int(frozen) > 10 * int(tracked), (frozen, tracked)
     assert (alive_before, freed) == ("True", "True")
 

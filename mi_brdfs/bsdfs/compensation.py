@@ -203,14 +203,15 @@ class Table:
     cosine-weighted average G_avg(p), for the active variant."""
 
     def __init__(self, axes: tuple[Axis, ...], values: np.ndarray, directions: int = 1,
-                 specs: tuple = ()):
+                 specs: tuple = (), bounds=(0.0, None)):
         self.axes, self.directions = tuple(axes), directions
         self.specs = tuple(specs)           # the shipped tables it is made from
         # B-spline coefficients clipped at 0: the interpolant stays >= 0 with no
         # clamp, so G_avg below is the exact integral of what is looked up. (Not
         # at 1: near F0 = 1 at large alpha, W rises steeply to 1 and a clip there
-        # would pull the white surface's g below 1 - E.)
-        self.grid = Grid(self.axes, values, bounds=(0.0, None))
+        # would pull the white surface's g below 1 - E.) ``bounds=None`` for a
+        # table of logarithms.
+        self.grid = Grid(self.axes, values, bounds=bounds)
         weights = []
         for axis in self.axes[:directions]:
             m = 1 << 16

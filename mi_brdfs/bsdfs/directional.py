@@ -26,10 +26,10 @@ could hold that narrow a difference, so the closed form carries it.
 
 **The table.** S = f_ms (cos θ_i + cos θ_o) over five axes: cos θ_i and
 cos θ_o (13 nodes each, denser towards grazing), the half vector's place u
-between the mirror azimuth and retro-reflection (9 nodes, denser near the
-mirror), α (17 nodes, log-spaced from ``ALPHA_START`` to ``ALPHA_END``) and
-Schlick's F0 (6 nodes); read as its magnitude times its shape
-(:class:`PairTable`). With θ_h the angle of h = (ω_i + ω_o)/|ω_i + ω_o|
+between the mirror azimuth and retro-reflection (13 nodes, denser towards
+both ends), α (17 nodes, log-spaced from ``ALPHA_START`` to ``ALPHA_END``)
+and Schlick's F0 (6 nodes); read as its magnitude times its shape, times a
+factor per direction that gives it the walk's albedo (:class:`PairTable`). With θ_h the angle of h = (ω_i + ω_o)/|ω_i + ω_o|
 from the normal,
 
 .. math::
@@ -38,7 +38,11 @@ from the normal,
              {(\theta_i + \theta_o)/2 - |\theta_i - \theta_o|/2} \in [0, 1],
 
 0 at the mirror azimuth (where θ_h is least) and 1 at retro-reflection (where
-it is largest). At small α the walk's multiple scattering follows the half
+it is largest). At grazing pairs the retro-reflection half of the azimuths
+is a sliver of u (80°/80°: u from 0.95 side on to 1), where Beckmann's k >= 2
+at large α falls off a cliff; with 9 nodes denser only near the mirror the
+table gave 0.07 of the walk there (α 2, 80°/80° side on), with 13 denser
+towards both ends 0.8 and more. At small α the walk's multiple scattering follows the half
 vector, a ridge a few degrees wide about the mirror azimuth; an axis of the
 plain azimuth smears it, this one resolves it (the study in the issue that
 asked for this lobe: 8-52 % there with the azimuth, 0.4-1.8 % with u).
@@ -87,46 +91,62 @@ ALPHA_END = 2.0            # the roughness up to which the walk is tabulated (he
 PAIR_PATHS = 1 << 14       # walk paths per node and per end
 MU_AXIS_I = Axis("mu_i", 0.0, 1.0, 13, "sqrt")
 MU_AXIS_O = Axis("mu_o", 0.0, 1.0, 13, "sqrt")
-U_AXIS = Axis("u", 0.0, 1.0, 9, "sqrt")
+U_AXIS = Axis("u", 0.0, 1.0, 13, "sine")
 ALPHA_AXIS = Axis("alpha", ALPHA_START, ALPHA_END, 17, "log", smooth=True)
 F0_AXIS = Axis("f0", 0.0, 1.0, 6, smooth=True)           # the walk's F0 nodes
 SHAPE_F0_AXIS = Axis("f0", 0.2, 1.0, 5, smooth=True)     # the shape's (held below 0.2)
 STORED_AXES = (MU_AXIS_I, MU_AXIS_O, U_AXIS, ALPHA_AXIS, F0_AXIS)   # the walked S
 PAIR_AXES = (MU_AXIS_I, MU_AXIS_O, U_AXIS, ALPHA_AXIS, SHAPE_F0_AXIS)   # its shape's lookup
 ALBEDO_AXES = (Axis("mu", 0.0, 1.0, 13, "sqrt"), ALPHA_AXIS, F0_AXIS)
+SCALE_AXES = (Axis("mu", 0.0, 1.0, 25, "sqrt"), ALPHA_AXIS, Axis("f0", 0.0, 1.0, 11, smooth=True))
+SCALE_PATHS = 1 << 19      # walk paths per node of the scale's target
 
 
 @dataclass(frozen=True)
-class PairSpec:
-    """The walk's bounces k >= 2 by pair of directions, S = f_ms (μ_i + μ_o),
-    of the Smith microsurface of ``distribution``, over :data:`STORED_AXES`;
-    built by :func:`mi_brdfs.tools.tables.build_pairs`."""
+class _Spec:
+    """A shipped table of the directional lobe of ``distribution``'s Smith
+    microsurface: named ``directional/<distribution>`` and its ``part``, over
+    ``AXES``."""
     distribution: str
-    paths: int = PAIR_PATHS
+    part = ""
+    AXES = ()
 
     @property
     def name(self) -> str:
-        return f"directional/{self.distribution}"
+        return f"directional/{self.distribution}" + (f"/{self.part}" if self.part else "")
 
     @property
     def axes(self) -> tuple[Axis, ...]:
-        return STORED_AXES
+        return type(self).AXES
 
 
 @dataclass(frozen=True)
-class PairAlbedoSpec:
+class PairSpec(_Spec):
+    """The walk's bounces k >= 2 by pair of directions, S = f_ms (μ_i + μ_o),
+    over :data:`STORED_AXES`; built by
+    :func:`mi_brdfs.tools.tables.build_pairs`."""
+    paths: int = PAIR_PATHS
+    AXES = STORED_AXES
+
+
+@dataclass(frozen=True)
+class ScaleSpec(_Spec):
+    """c(μ, α, F0) over :data:`SCALE_AXES`: the lobe read as f_ms c(μ_i)
+    c(μ_o) has, at every node, the directional albedo of the walk's bounces
+    k >= 2 (see :class:`PairTable`); built by
+    :func:`mi_brdfs.tools.tables.calibrate`."""
+    paths: int = SCALE_PATHS
+    part = "scale"
+    AXES = SCALE_AXES
+
+
+@dataclass(frozen=True)
+class PairAlbedoSpec(_Spec):
     """The directional albedo of a :class:`PairSpec`'s lobe over
     :data:`ALBEDO_AXES`, ∫ f_ms cos θ_o dω_o of the interpolated table (its
     sampling weight), computed with it."""
-    distribution: str
-
-    @property
-    def name(self) -> str:
-        return f"directional/{self.distribution}/albedo"
-
-    @property
-    def axes(self) -> tuple[Axis, ...]:
-        return ALBEDO_AXES
+    part = "albedo"
+    AXES = ALBEDO_AXES
 
 
 # ----------------------------------------------------------------------------
@@ -252,11 +272,22 @@ class PairTable:
       (M(LOW_F0) - M(0)) · (S(LOW_F0) - S(0)): at F0 0 the light that is left,
       the grazing bounces' Fresnel alone, has another shape, which no spline of
       log R joins to the rest (with one, 9-12 % off the walk's albedo at F0 0.1,
-      30 times it at F0 0, normal incidence)."""
+      30 times it at F0 0, normal incidence).
+    - Times c(μ_i) c(μ_o) (``scale``, over :data:`SCALE_AXES`, log c
+      interpolated; None: 1), which
+      gives the interpolated lobe the walk's albedo of bounces k >= 2 at every
+      node (:func:`mi_brdfs.tools.tables.calibrate`): between the μ nodes the
+      interpolation takes light from the narrow ridge near the mirror pair of
+      small α (white Beckmann α 0.05 reflected 0.974 at 85°), and below
+      F0 ``LOW_F0`` the blend above gives the k >= 2 too much (Beckmann α 1,
+      F0 0.1: 3.6 % too bright at normal incidence). A product of one factor
+      per direction keeps the lobe symmetric, and its zeros zero."""
 
-    def __init__(self, values: np.ndarray, spec: PairSpec):
+    def __init__(self, values: np.ndarray, spec: PairSpec, scale: np.ndarray | None = None):
         values = np.maximum(values, 0.0)
         self.specs = (spec,)
+        self.scale = None if scale is None else Table(        # log c: exact at the nodes
+            SCALE_AXES, np.log(scale), 1, (ScaleSpec(spec.distribution),), bounds=None)
         magnitude = np.maximum(values.mean(axis=(0, 1, 2)), 1e-30)          # (α, F0)
         shape = values / magnitude[None, None, None]
         floor = FLOOR * np.maximum(shape.max(axis=(0, 1, 2)), 1e-30)        # (α, F0)
@@ -295,6 +326,8 @@ class Reader:
                          magnitude=table.magnitude.specialise(at),
                          magnitude0=table.magnitude.specialise((alpha, 0.0)),
                          magnitude_low=table.magnitude.specialise((alpha, LOW_F0)))
+        if table.scale is not None:
+            parts["scale"] = table.scale.specialise(at)
         self.parts = parts
         self.fixed = tuple(parts["magnitude"].fixed)
 
@@ -319,11 +352,11 @@ class Reader:
             span = m_low - m0
             t = (m - m0) / dr.select(span > 0.0, span, 1.0)
             low = s0 + t * (s_low - s0)
-        if high is None:
-            return low
-        if low is None:
-            return high
-        return dr.select(f0 < LOW_F0, low, high)
+        s = low if high is None else high if low is None else dr.select(f0 < LOW_F0, low, high)
+        if "scale" not in self.parts:
+            return s
+        wi, wo = pair        # (log c_i + log c_o first: the same bits in either order)
+        return s * dr.exp(read("scale", wi, (alpha, f0)) + read("scale", wo, (alpha, f0)))
 
 
 def read_s(table: PairTable, pair, alpha: float, f0: float):
@@ -419,7 +452,7 @@ def _pair_table(distribution: str) -> PairTable:
     key = (mi.variant(), "pairs", distribution)
     if key not in _cache:
         spec = PairSpec(distribution)
-        _cache[key] = PairTable(shipped(spec), spec)
+        _cache[key] = PairTable(shipped(spec), spec, shipped(ScaleSpec(distribution)))
     return _cache[key]
 
 

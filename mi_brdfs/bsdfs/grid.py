@@ -7,6 +7,7 @@ with textured parameters and are differentiable in every coordinate. An
 (``linear``: x itself; ``sqrt``: sqrt(x), denser near ``lo``; ``log1p``:
 log(1 + x), for exponents spanning decades; ``log``: log(x), ``lo`` > 0, for a
 roughness whose features scale with it (below ``lo`` the value at ``lo``);
+``sine``: (2/π) asin(sqrt(x)) on [0, 1], x = sin²(πu/2), denser near both ends;
 ``ratio``: sqrt(x / (1 + x)) and ``root``: sqrt(x) / (1 + sqrt(x)), which map
 [0, ∞] onto [0, 1] — sqrt near 0,
 the last node is x = ∞, and 1 - u falls as 1/(2x) or 1/sqrt(x) towards it);
@@ -98,6 +99,8 @@ class Axis:
             return np.where(np.isinf(x), 1.0, u)
         if self.warp == "log":
             return np.log(np.maximum(x, self.lo))
+        if self.warp == "sine":
+            return (2.0 / np.pi) * np.arcsin(np.sqrt(np.clip(x, 0.0, 1.0)))
         return {"linear": lambda v: v, "sqrt": np.sqrt, "log1p": np.log1p}[self.warp](x)
 
     def _inverse_np(self, u):
@@ -107,7 +110,7 @@ class Axis:
                     return np.where(u >= 1.0, np.inf, u * u / (1.0 - u * u))
                 return np.where(u >= 1.0, np.inf, (u / (1.0 - u)) ** 2)
         return {"linear": lambda v: v, "sqrt": np.square, "log1p": np.expm1,
-                "log": np.exp}[self.warp](u)
+                "log": np.exp, "sine": lambda v: np.sin(0.5 * np.pi * v) ** 2}[self.warp](u)
 
     def _forward_dr(self, x):
         if self.warp == "sqrt":
@@ -116,6 +119,8 @@ class Axis:
             return dr.log(1.0 + dr.fmax(x, 0.0))
         if self.warp == "log":
             return dr.log(dr.fmax(x, self.lo))
+        if self.warp == "sine":
+            return (2.0 / dr.pi) * dr.asin(dr.sqrt(dr.clip(x, 0.0, 1.0)))
         if self.warp == "ratio":
             x = dr.fmax(x, 0.0)
             return dr.sqrt(x / (1.0 + x))
@@ -162,6 +167,8 @@ class Axis:
             du = scale / (1.0 + x)
         elif self.warp == "log":
             du = scale / x
+        elif self.warp == "sine":
+            du = scale / (np.pi * np.sqrt(x * (1.0 - x)))
         elif self.warp == "ratio":
             du = scale * 0.5 / (np.sqrt(x / (1.0 + x)) * (1.0 + x) ** 2)
         elif self.warp == "root":

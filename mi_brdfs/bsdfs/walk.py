@@ -344,8 +344,9 @@ def evaluate(s: Surface, wi, wo, fresnel: Callable, uv):
 
 
 def sample(s: Surface, wi, fresnel: Callable, rng):
-    """(wo, weight): the direction in which the walk from wi leaves, and the
-    product of its Fresnel factors (0 if still inside after MAX_BOUNCES)."""
+    """(wo, weight, bounces): the direction in which the walk from wi leaves,
+    the product of its Fresnel factors (0 if still inside after MAX_BOUNCES)
+    and the number of facets it met."""
     kind, one, constant = _unit(fresnel)
 
     def body(w, tau, weight, rng, k, inside):
@@ -359,10 +360,10 @@ def sample(s: Surface, wi, fresnel: Callable, rng):
         return w, tau, weight, rng, dr.select(inside, k + 1, k), inside
 
     state = (-wi, dr.zeros(mi.Float), one, rng, mi.UInt32(0), mi.Bool(True))
-    w, tau, weight, _, _, _ = dr.while_loop(
+    w, tau, weight, _, k, _ = dr.while_loop(
         state, lambda *a: a[5] & (a[4] <= MAX_BOUNCES), body, label="walk_sample")
     left = (w.z > 0.0) & (tau <= 0.0)          # (else still inside after MAX_BOUNCES)
-    return w, dr.select(left, weight, 0.0)
+    return w, dr.select(left, weight, 0.0), k
 
 
 def pdf(s: Surface, wi, wo):
@@ -408,7 +409,7 @@ def sample_bsdf(plugin, ctx, si, sample1, sample2, active=True):
     probs = plugin.probabilities(inp, None, si, use)
     w_d, w_s = plugin.lobe_weights(inp)
     with dr.suspend_grad():
-        wo, throughput = sample(surface(inp.microfacet), si.wi,
+        wo, throughput, _ = sample(surface(inp.microfacet), si.wi,
                                 lambda c: plugin.fresnel(inp, c),
                                 stream(sample1, sample2.x, sample2.y, si.wi.x, si.wi.y))
     weight = inp.colour_s * (throughput * w_s)

@@ -5,7 +5,10 @@
     python -m mi_brdfs.tools.tables --check         # measure the tables' errors
 
 Single-scattering tables (E, by quadrature over each model's sampler) take
-seconds; the random-walk tables (W, :mod:`.groundtruth`) minutes.
+seconds; the random-walk tables (W, :mod:`.groundtruth`) minutes, as do the
+directional lobe's (``--only directional/ggx directional/beckmann``: its pair
+table, the scale that gives it the walk's albedo, :func:`calibrate`, and its
+albedo).
 
 ``--check`` measures, for every single-scattering table, (1) the quadrature
 error: the largest difference between the shipped values and a fresh build
@@ -165,26 +168,134 @@ def build_pairs(spec, paths: int | None = None, log=None) -> np.ndarray:
     return 0.5 * (out + out.transpose(1, 0, 2, 3, 4))
 
 
-def pair_albedo(spec, values: np.ndarray, n: int = 96) -> np.ndarray:
-    """The directional albedo of the interpolated pair table, ∫ f_ms cos θ_o dω_o,
-    at the nodes of :data:`mi_brdfs.bsdfs.directional.ALBEDO_AXES` (μ, α, F0):
-    a midpoint rule over cos θ_o (n) and the azimuth (2n over [0, π], the
-    table being even in it), the table read as the plugin reads it."""
+SCALE_SEED = 20261208      # of the scale's target walks
+
+
+def walk_multiple_albedo(distribution: str, alpha: float, mus: np.ndarray, f0s: np.ndarray,
+                         paths: int, seed: int = SCALE_SEED) -> np.ndarray:
+    """The walk's directional albedo of bounces k >= 2 from each cos θ of
+    ``mus``, Schlick's F with each of ``f0s`` at every bounce: the mean of
+    the sampled walk's weight over the paths that met two facets or more
+    (:func:`mi_brdfs.bsdfs.walk.sample`), (len(mus), len(f0s)). The same
+    random numbers, path by path, for every cos θ, F0 and α."""
+    from ..bsdfs import walk
+    from ..bsdfs.microfacet import Microfacet
+    s = walk.surface(Microfacet(distribution, mi.Float(max(alpha, 1e-4)), visible=True))
+    n = len(mus)
+    mu = np.repeat(np.maximum(mus, MU_MIN), paths)
+    wi = from_numpy(mi.Vector3f, (np.sqrt(1.0 - mu * mu), 0.0 * mu, mu))
+    path = dr.arange(mi.UInt32, n * paths) % paths
+    padded = np.concatenate([f0s, np.ones(-len(f0s) % 3)]).reshape(-1, 3)
+    out = []
+    for three in padded:
+        schlick = lambda c, three=three: mi.Color3f(
+            *[float(f) + (1.0 - float(f)) * dr.power(dr.fmax(1.0 - c, 0.0), 5) for f in three])
+        _, weight, bounces = walk.sample(s, wi, schlick, mi.PCG32(n * paths, path, 2 * seed + 1))
+        kept = dr.select(bounces >= 2, weight, 0.0)
+        out.append(np.asarray(kept).reshape(3, n, paths).mean(axis=-1).T)
+    return np.concatenate(out, axis=1)[:, :len(f0s)]
+
+
+def pair_cells(mus: np.ndarray, n_mu: int = 192, n_u: int = 96):
+    """The quadrature of :func:`pair_kernel` for each cos θ_i of ``mus``:
+    cos θ_o at the midpoints of n_mu cells uniform in sqrt(μ_o) (the table's
+    and the scale's warp) with their widths, and the azimuth at the midpoints
+    of n_u cells of u uniform in the table's u warp, with the azimuth each
+    cell spans (over [0, π]; u falls as the azimuth grows). In the table's
+    own coordinates each cell holds a smooth piece of the interpolant: near
+    the grazing mirror pair of small α the lobe is a spike a degree wide in
+    azimuth, which a midpoint rule uniform in azimuth misses (twice the light
+    or half of it)."""
+    t = (np.arange(n_mu) + 0.5) / n_mu
+    mo, dmo = t * t, 2.0 * t / n_mu
+    axis = directional.U_AXIS
+    a, b = axis._ends()
+    edges = axis._inverse_np(np.linspace(a, b, n_u + 1))
+    mids = axis._inverse_np(a + (np.arange(n_u) + 0.5) * (b - a) / n_u)
+    I, M = (g.ravel() for g in np.meshgrid(np.maximum(mus, MU_MIN), mo, indexing="ij"))
+    rep = lambda x, k: np.repeat(x, k)
+    phi_edges = directional.azimuth_at(rep(I, n_u + 1), rep(M, n_u + 1),
+                                       np.tile(edges, I.size)).reshape(I.size, n_u + 1)
+    phi = directional.azimuth_at(rep(I, n_u), rep(M, n_u),
+                                 np.tile(mids, I.size)).reshape(I.size, n_u)
+    dphi = phi_edges[:, :-1] - phi_edges[:, 1:]
+    # along the normal u is 0 at every azimuth (and the lobe does not depend on
+    # it): where min(θ_i, θ_o), u's span, is below u_coordinate's 1e-6
+    flat = np.minimum(np.arccos(np.minimum(I, 1.0)), np.arccos(np.minimum(M, 1.0))) <= 1e-6
+    phi[flat] = (np.arange(n_u) + 0.5) * np.pi / n_u
+    dphi[flat] = np.pi / n_u
+    return mo, dmo, phi, dphi
+
+
+def pair_kernel(table, alpha: float, f0: float, mus: np.ndarray, cells=None):
+    """K with the directional albedo of ``table``'s lobe at each cos θ_i of
+    ``mus`` = K @ (a factor at each cos θ_o of the quadrature), and those
+    cos θ_o: ∫ S / (μ_i + μ_o) μ_o dω_o over the cells of :func:`pair_cells`
+    (the lobe is even in the azimuth: twice [0, π])."""
+    mo, dmo, phi, dphi = cells if cells is not None else pair_cells(mus)
+    n_mu, n_u = len(mo), phi.shape[1]
+    I = np.repeat(np.maximum(mus, MU_MIN), n_mu * n_u)
+    M = np.tile(np.repeat(mo, n_u), len(mus))
+    wi, wo = directional.pair_directions(I, M, phi.ravel())
+    pair = tuple(from_numpy(mi.Vector3f, w.T.astype(np.float32)) for w in (wi, wo))
+    s = np.asarray(directional.read_s(table, pair, float(alpha), float(f0)), dtype=np.float64)
+    s = (s * M / (I + M) * 2.0 * dphi.ravel()).reshape(len(mus), n_mu, n_u).sum(axis=-1)
+    return s * dmo, mo
+
+
+def calibrate(spec, values: np.ndarray, paths: int | None = None, log=None,
+              iterations: int = 100) -> np.ndarray:
+    """c over :data:`mi_brdfs.bsdfs.directional.SCALE_AXES` (μ, α, F0) such
+    that the pair table ``values`` read as f_ms c(μ_i) c(μ_o) has the walk's
+    albedo of bounces k >= 2 (:func:`walk_multiple_albedo`) at every node:
+    per (α, F0), symmetric Sinkhorn steps c <- c sqrt(target / albedo) on the
+    interpolated lobe's albedo (:func:`pair_kernel`, c read between its μ
+    nodes as the plugin reads it, linearly in log c). Where the target or the
+    albedo is below 1e-6 (no light to put right) c stays 1; c is kept in
+    [1/4, 4]."""
+    scale = directional.ScaleSpec(spec.distribution)
+    paths = paths or scale.paths
+    mu_axis, alpha_axis, f0_axis = scale.axes
+    mus, f0s = mu_axis.nodes(), f0_axis.nodes()
     table = directional.PairTable(values, spec)
+    cells = pair_cells(mus)
+    out = np.ones((mu_axis.n, alpha_axis.n, f0_axis.n))
+    for k, alpha in enumerate(alpha_axis.nodes()):
+        target = walk_multiple_albedo(spec.distribution, float(alpha), mus, f0s, paths)
+        worst = 0.0
+        for j, f0 in enumerate(f0s):
+            kernel, mo = pair_kernel(table, alpha, f0, mus, cells)
+            x = mu_axis.coordinate_np(mo)           # log c at mo: linear between nodes
+            lo = np.minimum(x.astype(int), mu_axis.n - 2)
+            read = np.zeros((len(mo), mu_axis.n))
+            read[np.arange(len(mo)), lo] = 1.0 - (x - lo)
+            read[np.arange(len(mo)), lo + 1] = x - lo
+            albedo = lambda c: c * (kernel @ np.exp(read @ np.log(c)))
+            c, goal = np.ones(mu_axis.n), target[:, j]
+            for _ in range(iterations):
+                a = albedo(c)
+                ok = (goal > 1e-6) & (a > 1e-6)
+                c = np.clip(np.where(ok, c * np.sqrt(goal / np.where(ok, a, 1.0)), 1.0), 0.25, 4.0)
+            worst = max(worst, float(np.max(np.abs(albedo(c) - goal))))
+            out[:, k, j] = c
+        if log:
+            log(f"  {scale.name}: alpha {alpha:.3g}, c in [{out[:, k].min():.3f}, "
+                f"{out[:, k].max():.3f}], albedo within {worst:.1e} of the walk's k >= 2")
+    return out
+
+
+def pair_albedo(spec, values: np.ndarray, scale: np.ndarray | None = None) -> np.ndarray:
+    """The directional albedo of the interpolated pair table (and its
+    ``scale``), ∫ f_ms cos θ_o dω_o, read as the plugin reads it, at the nodes
+    of :data:`mi_brdfs.bsdfs.directional.ALBEDO_AXES` (μ, α, F0), by
+    :func:`pair_kernel`'s quadrature."""
+    table = directional.PairTable(values, spec, scale)
     mu_axis, alpha_axis, f0_axis = directional.ALBEDO_AXES
-    mo = (np.arange(n) + 0.5) / n
-    ph = (np.arange(2 * n) + 0.5) / (2 * n) * np.pi
+    cells = pair_cells(mu_axis.nodes())
     out = np.zeros((mu_axis.n, alpha_axis.n, f0_axis.n))
-    weight = 2.0 * (1.0 / n) * (np.pi / (2 * n))       # dμ_o, dφ over [0, π] twice
     for j, alpha in enumerate(alpha_axis.nodes()):
         for k, f0 in enumerate(f0_axis.nodes()):
-            for i, mu in enumerate(np.maximum(mu_axis.nodes(), MU_MIN)):
-                M, P = (g.ravel() for g in np.meshgrid(mo, ph, indexing="ij"))
-                wi, wo = directional.pair_directions(np.full_like(M, mu), M, P)
-                pair = tuple(mi.Vector3f(*[from_numpy(mi.Float, w[:, c].astype(np.float32))
-                                           for c in range(3)]) for w in (wi, wo))
-                s = np.asarray(directional.read_s(table, pair, float(alpha), float(f0)))
-                out[i, j, k] = float(np.sum(s * M / (mu + M)) * weight)
+            out[:, j, k] = pair_kernel(table, alpha, f0, mu_axis.nodes(), cells)[0].sum(axis=1)
     return out
 
 
@@ -330,10 +441,12 @@ def main(argv: list[str] | None = None) -> int:
                 print(check_pairs(spec, log) + f" [{time.perf_counter() - start:.0f} s]")
                 continue
             out[spec.name] = build_pairs(spec, args.paths, log)
+            scale = directional.ScaleSpec(spec.distribution)
+            out[scale.name] = calibrate(spec, out[spec.name], log=log)
             albedo = directional.PairAlbedoSpec(spec.distribution)
-            out[albedo.name] = pair_albedo(spec, out[spec.name])
+            out[albedo.name] = pair_albedo(spec, out[spec.name], out[scale.name])
             log(f"{spec.name}: {out[spec.name].size} nodes x {args.paths or spec.paths} paths "
-                f"per end, and {albedo.name}, {time.perf_counter() - start:.1f} s")
+                f"per end, {scale.name} and {albedo.name}, {time.perf_counter() - start:.1f} s")
             continue
         if args.check and walk:
             print(check_walk(spec, max(1000, (args.paths or spec.paths) // 4), log)

@@ -11,7 +11,7 @@ import numpy as np
 
 from ..destinations import OutputError, check_output_file
 from .microsurface import DISTRIBUTIONS, Alpha
-from .pairs import directional_reference, print_directional_residuals
+from .pairs import DIRECTIONAL_PATHS, directional_reference, print_directional_residuals
 from .report import (compensated_albedo, fresnel_reference, grazing_difference, reference,
                      reference_agreement, residuals_fresnel,
                      reference_anisotropic, residuals, residuals_anisotropic, slice_difference)
@@ -39,7 +39,8 @@ def _parser() -> argparse.ArgumentParser:
                              "tests/bsdfs/test_directional.py)")
     parser.add_argument("--reference", help="read them from here (instead of walking); "
                                             "either kind")
-    parser.add_argument("--paths", type=int, default=100_000, help="paths per point")
+    parser.add_argument("--paths", type=int, default=None,
+                        help="paths per point (default 100,000; 400,000 for --directional)")
     parser.add_argument("--residuals", action="store_true",
                         help="print the compensated models' residuals against the walk")
     parser.add_argument("--agreement", action="store_true",
@@ -164,6 +165,8 @@ def main(argv: list[str] | None = None) -> int:
             or args.decomposition or args.anisotropic or args.grazing):
         parser.error("nothing to do: give -o FILE, --residuals, --agreement, --slices, "
                      "--grazing, --decomposition or --anisotropic")
+    if args.paths is None:
+        args.paths = DIRECTIONAL_PATHS if args.directional else 100_000
     if args.paths < 2:
         parser.error(f"--paths {args.paths}: at least 2 paths per point")
     if args.agreement and not args.reference:

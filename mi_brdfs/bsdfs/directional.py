@@ -273,8 +273,7 @@ class PairTable:
       the grazing bounces' Fresnel alone, has another shape, which no spline of
       log R joins to the rest (with one, 9-12 % off the walk's albedo at F0 0.1,
       30 times it at F0 0, normal incidence).
-    - Times c(μ_i) c(μ_o) (``scale``, over :data:`SCALE_AXES`, log c
-      interpolated; None: 1), which
+    - Times c(μ_i) c(μ_o) (``scale``, over :data:`SCALE_AXES`; None: 1), which
       gives the interpolated lobe the walk's albedo of bounces k >= 2 at every
       node (:func:`mi_brdfs.tools.tables.calibrate`): between the μ nodes the
       interpolation takes light from the narrow ridge near the mirror pair of
@@ -286,8 +285,9 @@ class PairTable:
     def __init__(self, values: np.ndarray, spec: PairSpec, scale: np.ndarray | None = None):
         values = np.maximum(values, 0.0)
         self.specs = (spec,)
-        self.scale = None if scale is None else Table(        # log c: exact at the nodes
-            SCALE_AXES, np.log(scale), 1, (ScaleSpec(spec.distribution),), bounds=None)
+        # (not clipped at 0: a clip would take the spline off its nodes)
+        self.scale = None if scale is None else Table(
+            SCALE_AXES, scale, 1, (ScaleSpec(spec.distribution),), bounds=None)
         magnitude = np.maximum(values.mean(axis=(0, 1, 2)), 1e-30)          # (α, F0)
         shape = values / magnitude[None, None, None]
         floor = FLOOR * np.maximum(shape.max(axis=(0, 1, 2)), 1e-30)        # (α, F0)
@@ -355,8 +355,8 @@ class Reader:
         s = low if high is None else high if low is None else dr.select(f0 < LOW_F0, low, high)
         if "scale" not in self.parts:
             return s
-        wi, wo = pair        # (log c_i + log c_o first: the same bits in either order)
-        return s * dr.exp(read("scale", wi, (alpha, f0)) + read("scale", wo, (alpha, f0)))
+        wi, wo = pair        # (c_i c_o first: the same bits in either order)
+        return s * (read("scale", wi, (alpha, f0)) * read("scale", wo, (alpha, f0)))
 
 
 def read_s(table: PairTable, pair, alpha: float, f0: float):

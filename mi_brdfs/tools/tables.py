@@ -250,7 +250,7 @@ def calibrate(spec, values: np.ndarray, paths: int | None = None, log=None,
     albedo of bounces k >= 2 (:func:`walk_multiple_albedo`) at every node:
     per (α, F0), symmetric Sinkhorn steps c <- c sqrt(target / albedo) on the
     interpolated lobe's albedo (:func:`pair_kernel`, c read between its μ
-    nodes as the plugin reads it, linearly in log c). Where the target or the
+    nodes as the plugin reads it, linearly). Where the target or the
     albedo is below 1e-6 (no light to put right) c stays 1; c is kept in
     [1/4, 4]."""
     scale = directional.ScaleSpec(spec.distribution)
@@ -265,12 +265,12 @@ def calibrate(spec, values: np.ndarray, paths: int | None = None, log=None,
         worst = 0.0
         for j, f0 in enumerate(f0s):
             kernel, mo = pair_kernel(table, alpha, f0, mus, cells)
-            x = mu_axis.coordinate_np(mo)           # log c at mo: linear between nodes
+            x = mu_axis.coordinate_np(mo)           # c at mo: linear between nodes
             lo = np.minimum(x.astype(int), mu_axis.n - 2)
             read = np.zeros((len(mo), mu_axis.n))
             read[np.arange(len(mo)), lo] = 1.0 - (x - lo)
             read[np.arange(len(mo)), lo + 1] = x - lo
-            albedo = lambda c: c * (kernel @ np.exp(read @ np.log(c)))
+            albedo = lambda c, k=kernel @ read: c * (k @ c)
             c, goal = np.ones(mu_axis.n), target[:, j]
             for _ in range(iterations):
                 a = albedo(c)

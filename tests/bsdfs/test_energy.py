@@ -273,8 +273,8 @@ def test_compensation_with_every_fresnel_form_matches_its_walk(distribution, nam
     1 %, F82-tint with a tint of (1, 0.9, 0.8) within 4 % (measured 3.03 % at
     α 0.2, 80°, GGX, separable; 2.95 %, Beckmann, directional). The
     directional lobe (the default here) alike since its scale (before it, on
-    Beckmann the dielectric was 4.98 % off and white 1.95 %; now 2.35 % and
-    0.41 %). An F82 whose tint dips to 0.2 is not (19.3 % GGX and 25.1 %
+    Beckmann the dielectric was 4.98 % off and white 1.95 %; now 2.45 % and
+    0.35 %). An F82 whose tint dips to 0.2 is not (19.3 % GGX and 25.1 %
     Beckmann, directional, 25.2 % separable, at α 0.1, 85°): the walk's
     grazing bounces see the dip, the average does not. python -m
     mi_brdfs.tools.groundtruth --reference

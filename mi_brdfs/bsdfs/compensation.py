@@ -209,8 +209,8 @@ class Table:
         # B-spline coefficients clipped at 0: the interpolant stays >= 0 with no
         # clamp, so G_avg below is the exact integral of what is looked up. (Not
         # at 1: near F0 = 1 at large alpha, W rises steeply to 1 and a clip there
-        # would pull the white surface's g below 1 - E.) ``bounds=None`` for a
-        # table of logarithms.
+        # would pull the white surface's g below 1 - E.) ``bounds=None``: no
+        # clip, for a table whose spline must pass through its nodes.
         self.grid = Grid(self.axes, values, bounds=bounds)
         weights = []
         for axis in self.axes[:directions]:

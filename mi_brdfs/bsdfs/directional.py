@@ -29,8 +29,8 @@ cos θ_o (13 nodes each, denser towards grazing), the half vector's place u
 between the mirror azimuth and retro-reflection (13 nodes, denser towards
 both ends), α (17 nodes, log-spaced from ``ALPHA_START`` to ``ALPHA_END``)
 and Schlick's F0 (6 nodes); read as its magnitude times its shape, times a
-factor per direction that gives it the walk's albedo (:class:`PairTable`). With θ_h the angle of h = (ω_i + ω_o)/|ω_i + ω_o|
-from the normal,
+factor per direction that gives it the walk's albedo (:class:`PairTable`).
+With θ_h the angle of h = (ω_i + ω_o)/|ω_i + ω_o| from the normal,
 
 .. math::
 
@@ -42,10 +42,11 @@ it is largest). At grazing pairs the retro-reflection half of the azimuths
 is a sliver of u (80°/80°: u from 0.95 side on to 1), where Beckmann's k >= 2
 at large α falls off a cliff; with 9 nodes denser only near the mirror the
 table gave 0.07 of the walk there (α 2, 80°/80° side on), with 13 denser
-towards both ends 0.8 and more. At small α the walk's multiple scattering follows the half
-vector, a ridge a few degrees wide about the mirror azimuth; an axis of the
-plain azimuth smears it, this one resolves it (the study in the issue that
-asked for this lobe: 8-52 % there with the azimuth, 0.4-1.8 % with u).
+towards both ends 0.8 and more. At small α the walk's multiple scattering
+follows the half vector, a ridge a few degrees wide about the mirror
+azimuth; an axis of the plain azimuth smears it, this one resolves it (the
+study in the issue that asked for this lobe: 8-52 % there with the azimuth,
+0.4-1.8 % with u).
 S, not f_ms, is stored: it stays bounded at grazing pairs, where f_ms grows
 as 1/cos (the walk's next-event estimator from both ends is S's, see
 :mod:`.walk`), and f_ms cos θ_o = S cos θ_o / (cos θ_i + cos θ_o).

@@ -410,8 +410,8 @@ def sample_bsdf(plugin, ctx, si, sample1, sample2, active=True):
     w_d, w_s = plugin.lobe_weights(inp)
     with dr.suspend_grad():
         wo, throughput, _ = sample(surface(inp.microfacet), si.wi,
-                                lambda c: plugin.fresnel(inp, c),
-                                stream(sample1, sample2.x, sample2.y, si.wi.x, si.wi.y))
+                                   lambda c: plugin.fresnel(inp, c),
+                                   stream(sample1, sample2.x, sample2.y, si.wi.x, si.wi.y))
     weight = inp.colour_s * (throughput * w_s)
     specular = True
     if probs is not None:

@@ -165,7 +165,7 @@ def grazing_rule(distribution, alpha, compensation):
 # walk's k >= 2 falls off a cliff (α 2, F0 1: 0.048 sr⁻¹ at 75°/75°, 3e-9 at
 # 85°/85°), all of it in the sliver of u between side on and retro-reflection
 # (80°/80°: u 0.95 to 1), and the table gave 0.42 (α 1) and 0.07 (α 2) of the
-# walk. With 13 nodes denser towards both ends it gives 0.84 and more.)
+# walk. With 13 nodes denser towards both ends it gives 0.76 and more.)
 # The separable lobe keeps the rule only at GGX α 0.6 and 1 (where the walk has
 # some k >= 2 at every grazing pair, and the lobe gives at least half of it).
 SEPARABLE_KEEPS = {("ggx", 0.6), ("ggx", 1.0)}

@@ -1264,8 +1264,13 @@ class CookTorrance(BRDF):
             related=[("cook_torrance ggx k=0.5 vs roughplastic ggx",
                       {**c, "distribution": "ggx", "geometry": "smith", "k": 0.5, "alpha": 0.3},
                       {"type": "roughplastic", "distribution": "ggx", "alpha": 0.3})],
+            # (the default F0, 0.04, is below the directional lobe's LOW_F0, where it
+            # reads two shapes; F0 0.5 reads one)
             energy=[("cook_torrance ggx smith", {**c, "distribution": "ggx", "geometry": "smith",
                                                  "alpha": 0.5, "k": 0.3}),
+                    ("cook_torrance ggx smith f0 0.5", {**c, "distribution": "ggx",
+                                                        "geometry": "smith", "alpha": 0.5,
+                                                        "k": 0.3, "f0": 0.5}),
                     ("cook_torrance beckmann cook_torrance", {**c, "alpha": 0.5, "k": 0.3}),
                     ("cook_torrance blinn smith", {**c, "distribution": "blinn", "geometry": "smith",
                                                    "alpha": 0.5, "k": 0.3}),

@@ -116,6 +116,22 @@ PAIR_SEED = 20261207      # of the directional tables' walks
 PAIR_F0S = ((0.0, 0.2, 0.4), (0.6, 0.8, 1.0))    # F0_AXIS's nodes, three per walk (a colour)
 
 
+def _walk_surface(distribution: str, alpha: float):
+    """The walk's Smith microsurface of ``distribution`` at one α (at least 1e-4)."""
+    from ..bsdfs import walk
+    from ..bsdfs.microfacet import Microfacet
+    return walk.surface(Microfacet(distribution, mi.Float(max(alpha, 1e-4)), visible=True))
+
+
+def _schlick_colour(f0s):
+    """Schlick's F of three F0s as the channels of one colour, for a walk that
+    takes all three on the same paths. (Not :func:`.fresnel.schlick` of a
+    colour F0: its 1 - F0 in float32 differs from this one's by an ulp, and
+    the shipped tables were walked with this one.)"""
+    return lambda c: mi.Color3f(*[float(f) + (1.0 - float(f)) * dr.power(dr.fmax(1.0 - c, 0.0), 5)
+                                  for f in f0s])
+
+
 def walk_pairs(distribution: str, alpha: float, wi: np.ndarray, wo: np.ndarray, paths: int,
                seed: int = PAIR_SEED, batch: int = 1 << 22) -> np.ndarray:
     """S = E[X + Y] of the walk's bounces k >= 2 at each pair (wi, wo) (N, 3),
@@ -125,8 +141,7 @@ def walk_pairs(distribution: str, alpha: float, wi: np.ndarray, wo: np.ndarray, 
     the same random numbers for every F0 and, path by path, for every pair.
     f_ms = S / (cos θ_i + cos θ_o)."""
     from ..bsdfs import walk
-    from ..bsdfs.microfacet import Microfacet
-    s = walk.surface(Microfacet(distribution, mi.Float(max(alpha, 1e-4)), visible=True))
+    s = _walk_surface(distribution, alpha)
     out = np.zeros((len(wi), 6))
     step = max(1, batch // paths)
     for start in range(0, len(wi), step):
@@ -138,8 +153,7 @@ def walk_pairs(distribution: str, alpha: float, wi: np.ndarray, wo: np.ndarray, 
         path = dr.arange(mi.UInt32, n * paths) % paths
         sums = []
         for f0s in PAIR_F0S:
-            schlick = lambda c, f0s=f0s: mi.Color3f(
-                *[f + (1.0 - f) * dr.power(dr.fmax(1.0 - c, 0.0), 5) for f in f0s])
+            schlick = _schlick_colour(f0s)
             x = walk.scattered(s, a, b, schlick, mi.PCG32(n * paths, path, 2 * seed + 1))
             y = walk.scattered(s, b, a, schlick, mi.PCG32(n * paths, path, 2 * seed + 3))
             total = x + y
@@ -179,8 +193,7 @@ def walk_multiple_albedo(distribution: str, alpha: float, mus: np.ndarray, f0s: 
     (:func:`mi_brdfs.bsdfs.walk.sample`), (len(mus), len(f0s)). The same
     random numbers, path by path, for every cos θ, F0 and α."""
     from ..bsdfs import walk
-    from ..bsdfs.microfacet import Microfacet
-    s = walk.surface(Microfacet(distribution, mi.Float(max(alpha, 1e-4)), visible=True))
+    s = _walk_surface(distribution, alpha)
     n = len(mus)
     mu = np.repeat(np.maximum(mus, MU_MIN), paths)
     wi = from_numpy(mi.Vector3f, (np.sqrt(1.0 - mu * mu), 0.0 * mu, mu))
@@ -188,9 +201,8 @@ def walk_multiple_albedo(distribution: str, alpha: float, mus: np.ndarray, f0s: 
     padded = np.concatenate([f0s, np.ones(-len(f0s) % 3)]).reshape(-1, 3)
     out = []
     for three in padded:
-        schlick = lambda c, three=three: mi.Color3f(
-            *[float(f) + (1.0 - float(f)) * dr.power(dr.fmax(1.0 - c, 0.0), 5) for f in three])
-        _, weight, bounces = walk.sample(s, wi, schlick, mi.PCG32(n * paths, path, 2 * seed + 1))
+        _, weight, bounces = walk.sample(s, wi, _schlick_colour(three),
+                                         mi.PCG32(n * paths, path, 2 * seed + 1))
         kept = dr.select(bounces >= 2, weight, 0.0)
         out.append(np.asarray(kept).reshape(3, n, paths).mean(axis=-1).T)
     return np.concatenate(out, axis=1)[:, :len(f0s)]
